@@ -1,0 +1,1 @@
+"""Command-line front end of the gpme package (gpme_core + crosscheck)."""

@@ -1,0 +1,135 @@
+"""The paper's crane (Fig. 1): compliant support, rotating column, pitching arm (rigid or
+RFEM-flexible), telescopic slider, programmed end-effector motion.
+
+All parameters of the example live here; docs/crane.md explains them.  The paper gives
+only s_z, d_z, a, b, A, T, t_0 and t_dr,0; every other value is our choice of a light
+crane whose flexible arm vibrates visibly.
+
+Frames (right-handed, z up; world frame 0 at the support on the column axis):
+  z1   prismatic along world z: the base on the vertical spring-damper support
+       (z1 = 0: spring unstretched).  Link ``base``: a plate below the column foot.
+  psi2 revolute about the base z axis at the column foot.  Link ``column`` up to
+       height ``column_height``.
+  psi3 revolute about the horizontal axis at the column top.  The arm frame is the
+       column frame moved up by column_height and turned +90 deg about x, so the arm lies
+       along its x axis, its z axis is horizontal (column -y) and psi3 > 0 lifts the arm.
+  arm  a solid round steel bar along arm x, RFEM-discretised with n_rfe segments
+       (coordinates psi_arm_r, theta_arm_r, phi_arm_r; psi bends in the vertical plane).
+  z4   prismatic along the x axis of the arm tip frame: the slider rod (length
+       slider_length, occupying x in [-slider_length, 0] of its frame) pushed out of the
+       tubular arm end; z4 = 0: slider tip at the arm tip.
+  E    the end-effector: the slider tip (origin of the slider frame).
+
+Programmed constraints (paper eqs. 4.1, 4.2, 8): Phi_1 = (x_E/a)^2 + (y_E/b)^2 - 1,
+Phi_2 = z_E - (z0 + A cos(2 pi t / T)); dependent coordinates psi3 and z4.
+"""
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import transforms as tf
+from .constraints import CoordinateProgramme, EllipseConstraint
+from .gpme import ProgrammedMotion
+from .inertia import cuboid, cylinder
+from .model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
+from .rfem import BeamProperties
+from .time_functions import Cosine, QuinticRamp
+
+
+@dataclass(frozen=True)
+class CraneParameters:
+    """Every number of the crane example (SI units)."""
+
+    # support (paper)
+    support_stiffness: float = 1e4          # s_z, N/m
+    support_damping: float = 2.5            # d_z, N s/m
+    # base plate under the column foot
+    base_mass: float = 5.0                  # kg
+    base_size: tuple = (0.4, 0.4, 0.1)      # m, box centred 0.05 m below the column foot
+    # column: hollow steel-like tube
+    column_mass: float = 3.0                # kg
+    column_height: float = 1.0              # m, foot to arm pivot
+    column_radius: float = 0.05             # m, outer
+    column_inner_radius: float = 0.045      # m
+    # arm: solid round steel bar
+    arm_length: float = 0.5                 # m, pivot to arm tip
+    arm_diameter: float = 0.014             # m
+    steel_youngs_modulus: float = 210e9     # Pa
+    steel_shear_modulus: float = 81e9       # Pa
+    steel_density: float = 7850.0           # kg/m^3
+    arm_viscosity: float = 6e7              # Pa s, Kelvin-Voigt (about 1 % in the 1st mode)
+    # slider rod
+    slider_mass: float = 1.0                # kg
+    slider_length: float = 0.5              # m
+    slider_radius: float = 0.01             # m
+    # drive on psi2 (paper eq. 9)
+    drive_torque: float = 1.0               # t_dr,0, N m
+    drive_ramp_time: float = 5.0            # t_0, s
+    # programmed motion (paper section 3)
+    ellipse_a: float = 0.375                # m, semi-axis along world x
+    ellipse_b: float = 0.750                # m, semi-axis along world y
+    z0: float = 1.0                         # m
+    amplitude: float = 0.5                  # A, m
+    period: float = 2.5                     # T, s
+    baumgarte_alpha: float = 20.0           # 1/s
+    baumgarte_beta: float = 20.0            # 1/s
+    gravity: tuple = STANDARD_GRAVITY       # m/s^2
+    # off-manifold initial state (the paper's: end-effector outside the ellipse)
+    initial_psi3: float = np.pi / 4         # rad
+    initial_z4: float = 0.2                 # m
+
+    def beam(self):
+        """BeamProperties of the arm."""
+        return BeamProperties.solid_circular(self.arm_length, self.arm_diameter,
+                                             self.steel_youngs_modulus, self.steel_shear_modulus,
+                                             self.steel_density, self.arm_viscosity)
+
+    def with_changes(self, **changes):
+        return replace(self, **changes)
+
+
+def build_crane(n_rfe=0, params=CraneParameters(), name=None):
+    """The crane Model; n_rfe = 0 is the rigid arm, n_rfe >= 1 the RFEM-flexible arm."""
+    p = params
+    b = ChainBuilder(name or (f"crane_flexible_n{n_rfe}" if n_rfe else "crane_rigid"),
+                     gravity=p.gravity)
+    b.add_joint("z1", PRISMATIC, (0, 0, 1), stiffness=p.support_stiffness,
+                damping=p.support_damping, link="base")
+    b.add_body(cuboid(p.base_mass, p.base_size, com=(0.0, 0.0, -0.5 * p.base_size[2])))
+    b.add_joint("psi2", REVOLUTE, (0, 0, 1), link="column")
+    b.add_body(cylinder(p.column_mass, p.column_radius, p.column_height, axis=2,
+                        com=(0.0, 0.0, 0.5 * p.column_height), inner_radius=p.column_inner_radius))
+    b.add_joint("psi3", REVOLUTE, (0, 0, 1),
+                origin=tf.translation(0, 0, p.column_height) @ tf.rot_x(np.pi / 2), link="arm")
+    b.add_beam("arm", p.beam(), n_rfe)
+    b.add_joint("z4", PRISMATIC, (1, 0, 0), link="slider")
+    b.add_body(cylinder(p.slider_mass, p.slider_radius, p.slider_length, axis=0,
+                        com=(-0.5 * p.slider_length, 0.0, 0.0)))
+    b.add_frame("E")
+    b.add_drive("psi2", QuinticRamp(p.drive_torque, p.drive_ramp_time))
+    return b.build()
+
+
+def crane_constraints(params=CraneParameters()):
+    """[Phi_1 ellipse (eq. 4.1), Phi_2 height programme (eqs. 4.2, 8)] on frame E."""
+    p = params
+    return [EllipseConstraint(p.ellipse_a, p.ellipse_b, frame="E", name="Phi_1"),
+            CoordinateProgramme(Cosine(p.z0, p.amplitude, p.period), axis=2, frame="E",
+                                name="Phi_2")]
+
+
+def crane_system(n_rfe=0, params=CraneParameters(), baumgarte=None):
+    """ProgrammedMotion of the crane with the paper's dependent coordinates psi3, z4."""
+    model = build_crane(n_rfe, params)
+    bg = baumgarte or (params.baumgarte_alpha, params.baumgarte_beta)
+    return ProgrammedMotion(model, crane_constraints(params), dependent=("psi3", "z4"),
+                            baumgarte=bg)
+
+
+def initial_state(model, params=CraneParameters()):
+    """(q0, q_dot0) of the paper's off-manifold start: at rest, support spring unstretched,
+    psi2 = 0, arm at ``initial_psi3``, slider at ``initial_z4``, flexible coordinates 0."""
+    q = np.zeros(model.n_coordinates)
+    q[model.index("psi3")] = params.initial_psi3
+    q[model.index("z4")] = params.initial_z4
+    return q, np.zeros(model.n_coordinates)

@@ -1,0 +1,148 @@
+"""Trace-form dynamics terms of an unconstrained serial chain.
+
+Equation of motion (Lagrange's equations of the second kind), paper's sign convention:
+
+    M(q) q_ddot = h(q, q_dot) + Q,    Q = -(g + d + f) + t,
+
+    m_ij = sum_l tr(T_i^(l) H^(l) T_j^(l)T)
+    h_i  = -sum_l sum_j sum_k tr(T_i^(l) H^(l) T_jk^(l)T) q_dot_j q_dot_k  (velocity products)
+    g_i  = dE_p,g / dq_i,  E_p,g = -sum_l gamma^T T^(l) H^(l) e_4,  gamma = (gravity, 0)
+    f    = K (q - q_ref)   (springs),  d = D q_dot  (dampers: d = dR/dq_dot),
+    t    = drive forces.
+
+All sums over l run over l >= max(i, j) only (chain structure); with the composite
+world pseudo-inertias Hc_k = sum_{l>=k} T^(l) H^(l) T^(l)T the mass matrix is
+m_ij = tr(S_i Hc_max(i,j) S_j^T), O(n^2).  Units: SI (kg, m, s, rad, N, N m).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import chain_kinematics, twist_velocities, velocity_product_accelerations
+
+
+def _as_kin(model, q_or_kin):
+    if hasattr(q_or_kin, "S"):
+        return q_or_kin
+    return chain_kinematics(model, q_or_kin)
+
+
+def world_pseudo_inertias(model, kin):
+    """(n, 4, 4) T^(l) H^(l) T^(l)T, the pseudo-inertia of link l in the world frame."""
+    return kin.T @ model.pseudo_inertias @ np.swapaxes(kin.T, 1, 2)
+
+
+def _reverse_cumsum(a):
+    return np.cumsum(a[::-1], axis=0)[::-1]
+
+
+def mass_matrix(model, q):
+    """(n, n) mass matrix M, m_ij = sum_l tr(T_i^(l) H^(l) T_j^(l)T); q (n,) or kinematics."""
+    kin = _as_kin(model, q)
+    composite = _reverse_cumsum(world_pseudo_inertias(model, kin))
+    y = kin.S @ composite                           # S_j Hc_j  (Hc symmetric)
+    e = np.einsum("iab,jab->ij", kin.S, y)          # e_ij = tr(S_i Hc_j S_j^T)
+    upper = np.triu(e)
+    return upper + np.triu(e, 1).T
+
+
+def velocity_product_terms(model, q, q_dot):
+    """(n,) h = -(Coriolis and centrifugal terms), M q_ddot = h + Q."""
+    kin = _as_kin(model, q)
+    b = velocity_product_accelerations(kin.S, q_dot)
+    g_acc = _reverse_cumsum(b @ world_pseudo_inertias(model, kin))
+    return -np.einsum("iab,iab->i", kin.S, g_acc)
+
+
+def _gamma(model):
+    return np.append(model.gravity, 0.0)
+
+
+def gravity_forces(model, q):
+    """(n,) g = dE_p,g/dq (the generalized gravity force is -g)."""
+    kin = _as_kin(model, q)
+    first_moments = _reverse_cumsum(kin.T @ model.pseudo_inertias[:, :, 3:4])[:, :, 0]
+    return -np.einsum("a,iab,ib->i", _gamma(model), kin.S, first_moments)
+
+
+def spring_forces(model, q):
+    """(n,) f = K (q - q_ref), N or N m."""
+    return model.stiffness * (np.asarray(q, dtype=float) - model.spring_reference)
+
+
+def damper_forces(model, q_dot):
+    """(n,) d = D q_dot = dR/dq_dot, N or N m."""
+    return model.damping * np.asarray(q_dot, dtype=float)
+
+
+def drive_forces(model, t):
+    """(n,) t(t), N or N m."""
+    return model.drive_forces(t)
+
+
+def generalized_forces(model, t, q, q_dot):
+    """(n,) Q = -(g + d + f) + t."""
+    return -(gravity_forces(model, q) + damper_forces(model, q_dot) + spring_forces(model, q)) \
+        + drive_forces(model, t)
+
+
+def kinetic_energy(model, q, q_dot):
+    """J, E_k = 1/2 sum_l tr(T_dot^(l) H^(l) T_dot^(l)T) (computed in trace form)."""
+    kin = _as_kin(model, q)
+    v = twist_velocities(kin.S, q_dot)
+    hw = world_pseudo_inertias(model, kin)
+    return 0.5 * float(np.einsum("lab,lbc,lac->", v, hw, v))
+
+
+def gravity_potential_energy(model, q):
+    """J, E_p,g = -sum_l gamma^T T^(l) H^(l) e_4 (zero at the world origin)."""
+    kin = _as_kin(model, q)
+    return -float(np.einsum("a,lab,lb->", _gamma(model), kin.T, model.pseudo_inertias[:, :, 3]))
+
+
+def spring_potential_energy(model, q):
+    """J, 1/2 (q - q_ref)^T K (q - q_ref)."""
+    dq = np.asarray(q, dtype=float) - model.spring_reference
+    return 0.5 * float(dq @ (model.stiffness * dq))
+
+
+def potential_energy(model, q):
+    """J, gravity plus springs."""
+    return gravity_potential_energy(model, q) + spring_potential_energy(model, q)
+
+
+def rayleigh_function(model, q_dot):
+    """W, R = 1/2 q_dot^T D q_dot (the dissipated power is 2 R)."""
+    qd = np.asarray(q_dot, dtype=float)
+    return 0.5 * float(qd @ (model.damping * qd))
+
+
+@dataclass(frozen=True)
+class DynamicsTerms:
+    """Every term of M q_ddot = h + Q at one (t, q, q_dot), sharing one kinematics."""
+
+    kin: object
+    M: np.ndarray
+    h: np.ndarray
+    g: np.ndarray
+    f: np.ndarray
+    d: np.ndarray
+    t: np.ndarray
+
+    @property
+    def Q(self):
+        """(n,) -(g + d + f) + t."""
+        return -(self.g + self.d + self.f) + self.t
+
+    @property
+    def rhs(self):
+        """(n,) h + Q."""
+        return self.h + self.Q
+
+
+def dynamics_terms(model, t, q, q_dot):
+    """All terms at once (one forward-kinematics pass)."""
+    kin = chain_kinematics(model, q)
+    return DynamicsTerms(kin, mass_matrix(model, kin), velocity_product_terms(model, kin, q_dot),
+                         gravity_forces(model, kin), spring_forces(model, q),
+                         damper_forces(model, q_dot), drive_forces(model, t))

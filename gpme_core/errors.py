@@ -1,0 +1,35 @@
+"""Exception types raised by gpme_core.
+
+Every error raised for user input names the offending value and what would be valid.
+"""
+
+
+class GpmeError(Exception):
+    """Base class of all gpme errors."""
+
+
+class ModelError(GpmeError, ValueError):
+    """A model description is invalid (the message lists every problem found)."""
+
+    def __init__(self, problems):
+        if isinstance(problems, str):
+            problems = [problems]
+        self.problems = list(problems)
+        if len(self.problems) == 1:
+            msg = self.problems[0]
+        else:
+            msg = f"{len(self.problems)} problems in the model:\n" + "\n".join(
+                f"  - {p}" for p in self.problems)
+        super().__init__(msg)
+
+
+class ModelFileError(ModelError):
+    """A model file (URDF, side file) is malformed or uses an unsupported feature."""
+
+
+class ConstraintError(GpmeError):
+    """The programmed constraints cannot be met (singular Jacobian, unreachable target)."""
+
+
+class SimulationError(GpmeError):
+    """A run diverged or produced non-finite values."""

@@ -1,0 +1,136 @@
+"""Rigid-body inertia and the 4x4 pseudo-inertia matrix H of the trace formulation.
+
+For a body with mass m, centre of mass c (body frame) and inertia tensor I_C about
+the centre of mass (body axes),
+
+    H = integral over the body of r r^T dm,   r = (x, y, z, 1) in the body frame,
+
+so that  H[:3, :3] = J_C + m c c^T  with  J_C = tr(I_C)/2 * E - I_C,
+         H[:3, 3] = H[3, :3] = m c,  H[3, 3] = m.
+
+A constant change of frame X (4, 4), with r_a = X r_b, gives H_a = X H_b X^T.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ModelError
+
+_INERTIA_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class RigidBodyInertia:
+    """Mass properties of one rigid body.
+
+    mass    : kg, > 0
+    com     : (3,) m, centre of mass in the body frame
+    inertia : (3, 3) kg m^2, about the centre of mass, body axes; symmetric positive
+              definite and satisfying the triangle inequalities of a real body.
+    """
+
+    mass: float
+    com: tuple = (0.0, 0.0, 0.0)
+    inertia: tuple = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+    def __post_init__(self):
+        object.__setattr__(self, "com", tuple(float(c) for c in np.ravel(self.com)))
+        inertia = np.asarray(self.inertia, dtype=float)
+        object.__setattr__(self, "inertia", tuple(tuple(row) for row in inertia))
+
+    @property
+    def com_array(self):
+        """(3,) m."""
+        return np.array(self.com)
+
+    @property
+    def inertia_array(self):
+        """(3, 3) kg m^2 about the centre of mass."""
+        return np.array(self.inertia)
+
+    def problems(self, label):
+        """List of human-readable problems with this inertia (empty when valid)."""
+        out = []
+        m = self.mass
+        if not np.isfinite(m) or m <= 0.0:
+            out.append(f"{label}: mass must be positive and finite, got {m!r} kg")
+        c = np.array(self.com)
+        if c.shape != (3,) or not np.all(np.isfinite(c)):
+            out.append(f"{label}: centre of mass must be 3 finite numbers in m, got {self.com!r}")
+        inertia = np.array(self.inertia)
+        if inertia.shape != (3, 3) or not np.all(np.isfinite(inertia)):
+            out.append(f"{label}: inertia must be a finite (3, 3) matrix, got shape {inertia.shape}")
+            return out
+        if not np.allclose(inertia, inertia.T, rtol=1e-12, atol=1e-15):
+            out.append(f"{label}: inertia tensor must be symmetric, got {inertia.tolist()}")
+            return out
+        eig = np.linalg.eigvalsh(inertia)
+        scale = max(abs(eig).max(), 1e-300)
+        if eig.min() <= _INERTIA_TOL * scale or eig.min() <= 0.0:
+            out.append(f"{label}: inertia tensor must be positive definite, "
+                       f"got principal moments {eig.tolist()} kg m^2")
+        elif (eig[0] + eig[1] < eig[2] * (1 - 1e-9)):
+            out.append(f"{label}: principal moments {eig.tolist()} kg m^2 violate the triangle "
+                       "inequality I1 + I2 >= I3 of a physical body")
+        return out
+
+    def pseudo_inertia(self):
+        """(4, 4) kg m^2 / kg m / kg pseudo-inertia H in the body frame."""
+        return pseudo_inertia(self.mass, self.com_array, self.inertia_array)
+
+
+def pseudo_inertia(mass, com, inertia_about_com):
+    """(4, 4) pseudo-inertia from mass (kg), com (3,) m and I_C (3, 3) kg m^2."""
+    c = np.asarray(com, dtype=float)
+    i_c = np.asarray(inertia_about_com, dtype=float)
+    h = np.zeros((4, 4))
+    h[:3, :3] = 0.5 * np.trace(i_c) * np.eye(3) - i_c + mass * np.outer(c, c)
+    h[:3, 3] = mass * c
+    h[3, :3] = mass * c
+    h[3, 3] = mass
+    return h
+
+
+def inertia_from_pseudo(h):
+    """Inverse of :func:`pseudo_inertia`: returns (mass, com (3,), I_C (3, 3))."""
+    mass = h[3, 3]
+    if mass <= 0.0:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    c = h[:3, 3] / mass
+    j_c = h[:3, :3] - mass * np.outer(c, c)
+    i_c = np.trace(j_c) * np.eye(3) - j_c
+    return mass, c, 0.5 * (i_c + i_c.T)
+
+
+def transform_pseudo_inertia(x, h):
+    """Express H (4, 4) given in frame b in frame a, where r_a = x @ r_b."""
+    return x @ h @ x.T
+
+
+def cuboid(mass, size, com=(0.0, 0.0, 0.0)):
+    """Solid box of side lengths size = (lx, ly, lz) m centred on ``com``."""
+    lx, ly, lz = size
+    k = mass / 12.0
+    return RigidBodyInertia(mass, com, np.diag([k * (ly ** 2 + lz ** 2), k * (lx ** 2 + lz ** 2),
+                                                k * (lx ** 2 + ly ** 2)]))
+
+
+def cylinder(mass, radius, length, axis=2, com=(0.0, 0.0, 0.0), inner_radius=0.0):
+    """Solid (or hollow, inner_radius > 0) cylinder with its axis along body axis ``axis``."""
+    r2 = radius ** 2 + inner_radius ** 2
+    axial = 0.5 * mass * r2
+    transverse = mass * (3.0 * r2 + length ** 2) / 12.0
+    moments = [transverse] * 3
+    moments[axis] = axial
+    return RigidBodyInertia(mass, com, np.diag(moments))
+
+
+def check_pseudo_inertia(h, label="H"):
+    """Raise ModelError unless h is a (4, 4) symmetric positive-definite pseudo-inertia."""
+    h = np.asarray(h, dtype=float)
+    if h.shape != (4, 4):
+        raise ModelError(f"{label}: expected shape (4, 4), got {h.shape}")
+    mass, com, i_c = inertia_from_pseudo(h)
+    problems = RigidBodyInertia(mass, com, i_c).problems(label)
+    if problems:
+        raise ModelError(problems)

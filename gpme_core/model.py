@@ -1,0 +1,341 @@
+"""Serial-chain model description: joints, links, frames, springs, dampers, drives.
+
+A model is a serial chain of joints k = 0 .. n-1, each with one coordinate q_k.  The
+frame of joint k after its motion is the frame of link k:
+
+    T^(k)(q) = T^(k-1)(q) @ origin_k @ motion_k(q_k),      T^(-1) = identity (world),
+
+where origin_k (4, 4) is constant (parent link frame -> joint frame at q_k = 0) and
+motion_k is a rotation about (revolute) or a translation along (prismatic) the unit
+``axis`` of the joint frame.  Link k carries the mass properties attached to it,
+expressed in its own frame (held as the pseudo-inertia H^(k)); links may be massless
+(intermediate frames of an RFEM spring-damping element).
+
+A model is built once by :class:`ChainBuilder`, validated once (every problem in one
+:class:`ModelError`), and immutable.  The state (t, q, q_dot) is passed in and out as
+arrays ordered as ``model.coordinate_names``.
+"""
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+
+from . import transforms as tf
+from .errors import ModelError
+from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
+
+REVOLUTE = "revolute"
+PRISMATIC = "prismatic"
+JOINT_KINDS = (REVOLUTE, PRISMATIC)
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One single-coordinate joint.
+
+    name            : coordinate name (unique)
+    kind            : "revolute" (q in rad) or "prismatic" (q in m)
+    axis            : (3,) unit vector in the joint frame
+    origin          : (4, 4) parent link frame -> joint frame at q = 0
+    stiffness       : N m/rad or N/m, >= 0; spring generalized force -stiffness (q - q_ref)
+    spring_reference: rad or m, q_ref
+    damping         : N m s/rad or N s/m, >= 0; damper generalized force -damping q_dot
+    link            : name of the link this joint moves
+    """
+
+    name: str
+    kind: str
+    axis: tuple
+    origin: np.ndarray
+    stiffness: float = 0.0
+    spring_reference: float = 0.0
+    damping: float = 0.0
+    link: str = ""
+
+
+@dataclass(frozen=True)
+class Link:
+    """Mass properties carried by the frame of one joint (None inertia = massless)."""
+
+    name: str
+    inertia: Optional[RigidBodyInertia]
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A named frame fixed on link ``link_index``; ``transform`` (4, 4) in the link frame."""
+
+    name: str
+    link_index: int
+    transform: np.ndarray
+
+
+@dataclass(frozen=True)
+class Drive:
+    """A force (N) or torque (N m) on coordinate ``joint`` given as a function of time (s)."""
+
+    joint: str
+    function: Callable[[float], float]
+
+
+@dataclass(frozen=True)
+class FlexibleLinkInfo:
+    """Record of a link discretised by the RFEM (for export and reports)."""
+
+    name: str
+    beam: object
+    n_segments: int
+    joint_indices: tuple
+    link_indices: tuple
+
+
+class Model:
+    """Immutable, validated serial-chain model.  Build it with :class:`ChainBuilder`."""
+
+    def __init__(self, joints, links, frames, drives, gravity, flexible_links, name):
+        self.name = name
+        self.joints = tuple(joints)
+        self.links = tuple(links)
+        self.frames = dict(frames)
+        self.drives = tuple(drives)
+        self.gravity = np.array(gravity, dtype=float)
+        self.flexible_links = tuple(flexible_links)
+        n = len(self.joints)
+        self.n_coordinates = n
+        self.coordinate_names = tuple(j.name for j in self.joints)
+        self._index = {name: k for k, name in enumerate(self.coordinate_names)}
+        self.origins = np.array([j.origin for j in self.joints])
+        self.axes = np.array([j.axis for j in self.joints], dtype=float)
+        self.is_revolute = np.array([j.kind == REVOLUTE for j in self.joints])
+        self.generators = np.array([
+            tf.revolute_generator(a) if rev else tf.prismatic_generator(a)
+            for a, rev in zip(self.axes, self.is_revolute)])
+        self.pseudo_inertias = np.array([
+            lk.inertia.pseudo_inertia() if lk.inertia is not None else np.zeros((4, 4))
+            for lk in self.links])
+        self.stiffness = np.array([j.stiffness for j in self.joints], dtype=float)
+        self.spring_reference = np.array([j.spring_reference for j in self.joints], dtype=float)
+        self.damping = np.array([j.damping for j in self.joints], dtype=float)
+        self._drive_indices = np.array([self._index.get(d.joint, -1) for d in self.drives], dtype=int)
+        for arr in (self.origins, self.axes, self.generators, self.pseudo_inertias,
+                    self.stiffness, self.spring_reference, self.damping, self.is_revolute):
+            arr.setflags(write=False)
+
+    # ------------------------------------------------------------------ lookup
+    def index(self, name):
+        """Index of the coordinate called ``name``."""
+        try:
+            return self._index[name]
+        except KeyError:
+            raise ModelError(f"no coordinate named {name!r}; the model has "
+                             f"{list(self.coordinate_names)}") from None
+
+    def frame(self, name):
+        """The :class:`Frame` called ``name``."""
+        try:
+            return self.frames[name]
+        except KeyError:
+            raise ModelError(f"no frame named {name!r}; the model has {sorted(self.frames)}") from None
+
+    @property
+    def total_mass(self):
+        """kg."""
+        return float(self.pseudo_inertias[:, 3, 3].sum())
+
+    def drive_forces(self, t):
+        """(n,) N or N m: the drive generalized forces t(t) at time t (s)."""
+        out = np.zeros(self.n_coordinates)
+        for k, d in zip(self._drive_indices, self.drives):
+            out[k] += d.function(t)
+        return out
+
+    def stiffness_matrix(self):
+        """(n, n) K of V = 1/2 (q - q_ref)^T K (q - q_ref)."""
+        return np.diag(self.stiffness)
+
+    def damping_matrix(self):
+        """(n, n) D of the Rayleigh function R = 1/2 q_dot^T D q_dot."""
+        return np.diag(self.damping)
+
+    def with_changes(self, joint_changes=None, link_inertias=None, name=None):
+        """A new validated model with some joint fields or link inertias replaced.
+
+        joint_changes : {joint name: {field: value}}; link_inertias : {link name: inertia}.
+        Used by tests and by the crosschecks to perturb one engine only.
+        """
+        joint_changes = joint_changes or {}
+        link_inertias = link_inertias or {}
+        joints = [Joint(**{**j.__dict__, **joint_changes.get(j.name, {})}) for j in self.joints]
+        links = [Link(lk.name, link_inertias.get(lk.name, lk.inertia)) for lk in self.links]
+        model = Model(joints, links, self.frames, self.drives, self.gravity,
+                      self.flexible_links, name or self.name)
+        validate_model(model)
+        return model
+
+    def __repr__(self):
+        return (f"Model({self.name!r}, {self.n_coordinates} coordinates, "
+                f"{len(self.frames)} frames, mass {self.total_mass:.6g} kg)")
+
+
+def _rigid_transform_problems(label, t):
+    t = np.asarray(t, dtype=float)
+    if t.shape != (4, 4):
+        return [f"{label}: expected a (4, 4) transform, got shape {t.shape}"]
+    if not np.all(np.isfinite(t)):
+        return [f"{label}: transform has non-finite entries"]
+    out = []
+    r = t[:3, :3]
+    if not np.allclose(r.T @ r, np.eye(3), atol=1e-9) or np.linalg.det(r) < 0:
+        out.append(f"{label}: rotation part is not a proper rotation (R^T R != I or det < 0)")
+    if not np.allclose(t[3], (0, 0, 0, 1)):
+        out.append(f"{label}: last row must be (0, 0, 0, 1), got {t[3].tolist()}")
+    return out
+
+
+def validate_model(model):
+    """Raise one ModelError listing every problem of ``model``."""
+    problems = []
+    if model.n_coordinates == 0:
+        problems.append("the model has no joints; add at least one")
+    seen = set()
+    for j in model.joints:
+        lbl = f"joint {j.name!r}"
+        if j.name in seen:
+            problems.append(f"{lbl}: duplicate coordinate name")
+        seen.add(j.name)
+        if j.kind not in JOINT_KINDS:
+            problems.append(f"{lbl}: kind must be one of {JOINT_KINDS}, got {j.kind!r}")
+        axis = np.asarray(j.axis, dtype=float)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or abs(np.linalg.norm(axis) - 1) > 1e-9:
+            problems.append(f"{lbl}: axis must be a unit 3-vector, got {list(np.ravel(axis))}")
+        problems += _rigid_transform_problems(f"{lbl} origin", j.origin)
+        for fld, unit in (("stiffness", "N/m or N m/rad"), ("damping", "N s/m or N m s/rad")):
+            v = getattr(j, fld)
+            if not np.isfinite(v) or v < 0:
+                problems.append(f"{lbl}: {fld} must be finite and >= 0 ({unit}), got {v!r}")
+        if not np.isfinite(j.spring_reference):
+            problems.append(f"{lbl}: spring_reference must be finite, got {j.spring_reference!r}")
+    link_names = set()
+    for lk in model.links:
+        if lk.name in link_names:
+            problems.append(f"link {lk.name!r}: duplicate link name")
+        link_names.add(lk.name)
+        if lk.inertia is not None:
+            problems += lk.inertia.problems(f"link {lk.name!r}")
+    for name, fr in model.frames.items():
+        if not 0 <= fr.link_index < model.n_coordinates:
+            problems.append(f"frame {name!r}: link index {fr.link_index} out of range")
+        problems += _rigid_transform_problems(f"frame {name!r}", fr.transform)
+    g = np.asarray(model.gravity)
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        problems.append(f"gravity must be a finite (3,) vector in m/s^2, got {g.tolist()}")
+    for d in model.drives:
+        if d.joint not in seen:
+            problems.append(f"drive on {d.joint!r}: no such coordinate; have {sorted(seen)}")
+        if not callable(d.function):
+            problems.append(f"drive on {d.joint!r}: function must be callable t -> force")
+    if not problems:
+        problems += _mass_matrix_problems(model)
+    if problems:
+        raise ModelError(problems)
+
+
+def _mass_matrix_problems(model):
+    from .dynamics import mass_matrix  # local import: dynamics imports model
+    q = model.spring_reference.copy()
+    m = mass_matrix(model, q)
+    eig = np.linalg.eigvalsh(m)
+    if eig.min() > 1e-12 * max(eig.max(), 1e-300):
+        return []
+    zero = [model.coordinate_names[k] for k in range(model.n_coordinates) if m[k, k] <= 1e-300]
+    hint = f"; coordinates moving no mass: {zero}" if zero else ""
+    return [f"the mass matrix at q = spring references is not positive definite "
+            f"(smallest eigenvalue {eig.min():.3e}){hint}; give the links they move a mass"]
+
+
+class ChainBuilder:
+    """Assemble a serial chain joint by joint, then :meth:`build` an immutable Model.
+
+    Each :meth:`add_joint` creates a new link (the joint's moving frame); the bodies,
+    beams and frames added afterwards attach to the newest link until the next joint.
+    """
+
+    def __init__(self, name="model", gravity=STANDARD_GRAVITY):
+        self.name = name
+        self.gravity = gravity
+        self._joints = []
+        self._link_names = []
+        self._link_h = []          # pseudo-inertia accumulated in the link frame
+        self._frames = {}
+        self._drives = []
+        self._flex = []
+        self._pending_origin = np.eye(4)   # offset of the next joint (e.g. a beam tip)
+
+    @property
+    def n_joints(self):
+        return len(self._joints)
+
+    def add_joint(self, name, kind, axis, origin=None, stiffness=0.0, spring_reference=0.0,
+                  damping=0.0, link=None):
+        """Add a joint (and its link); origin is relative to the current link frame."""
+        origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
+        if origin.shape == (4, 4):
+            origin = self._pending_origin @ origin
+        self._pending_origin = np.eye(4)
+        axis = tuple(float(a) for a in np.ravel(axis))
+        self._joints.append(Joint(name, kind, axis, origin, float(stiffness),
+                                  float(spring_reference), float(damping), link or name))
+        self._link_names.append(link or name)
+        self._link_h.append(None)
+        return len(self._joints) - 1
+
+    def add_body(self, inertia, origin=None):
+        """Attach a rigid body to the current link; origin (4, 4) body frame in link frame."""
+        if not self._joints:
+            raise ModelError("add a joint before attaching a body: bodies fixed to the world "
+                             "do not move and have no effect on the dynamics")
+        problems = inertia.problems(f"body on link {self._link_names[-1]!r}")
+        if problems:
+            raise ModelError(problems)
+        x = self._pending_origin if origin is None else self._pending_origin @ np.asarray(origin, float)
+        h = transform_pseudo_inertia(x, inertia.pseudo_inertia())
+        prev = self._link_h[-1]
+        self._link_h[-1] = h if prev is None else prev + h
+
+    def add_frame(self, name, transform=None):
+        """Name a frame fixed on the current link (e.g. the end-effector)."""
+        if not self._joints:
+            raise ModelError(f"frame {name!r}: add a joint first")
+        t = np.eye(4) if transform is None else np.asarray(transform, dtype=float)
+        self._frames[name] = Frame(name, len(self._joints) - 1, self._pending_origin @ t)
+
+    def add_drive(self, joint, function):
+        """A force/torque t(t) on coordinate ``joint``."""
+        self._drives.append(Drive(joint, function))
+
+    def add_beam(self, name, beam, n_segments):
+        """Attach an RFEM-discretised beam along +x of the current link (see gpme_core.rfem)."""
+        from .rfem import discretise_beam
+        discretise_beam(self, name, beam, n_segments)
+
+    # used by rfem
+    def _set_pending_origin(self, t):
+        self._pending_origin = np.asarray(t, dtype=float)
+
+    def _record_flexible(self, info):
+        self._flex.append(info)
+
+    def build(self):
+        """Validate and return the immutable :class:`Model`."""
+        links = []
+        for name, h in zip(self._link_names, self._link_h):
+            if h is None or h[3, 3] == 0.0:
+                links.append(Link(name, None))
+            else:
+                m, c, i_c = inertia_from_pseudo(h)
+                links.append(Link(name, RigidBodyInertia(m, c, i_c)))
+        model = Model(self._joints, links, self._frames, self._drives, self.gravity,
+                      self._flex, self.name)
+        validate_model(model)
+        return model
