@@ -1,0 +1,117 @@
+"""Atomic writing of CSV/HTML/PNG report files and small HTML building blocks.
+
+Every file is written to a temporary file in the same directory and moved into place
+with os.replace, so an interrupted run never leaves a half-written file where a good
+one was.  HTML pages are self-contained (inline CSS, images as data URIs).
+"""
+import base64
+import html
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:1rem auto;
+max-width:72rem;padding:0 1rem;color:#222;line-height:1.4}
+table{border-collapse:collapse;font-size:.85rem;display:block;overflow-x:auto;max-width:100%}
+th,td{border:1px solid #ccc;padding:.2rem .4rem;text-align:right;white-space:nowrap}
+th{background:#f0f0f0;position:sticky;top:0}td.l,th.l{text-align:left}
+tr.fail td{background:#fdd}tr.pass td.st{color:#060}tr.fail td.st{color:#a00;font-weight:bold}
+img{max-width:100%;height:auto}code{background:#f4f4f4;padding:0 .2rem}
+"""
+
+
+def atomic_write_bytes(path, data):
+    """Write ``data`` to ``path`` atomically (temporary file + os.replace)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path, text):
+    """Write UTF-8 ``text`` to ``path`` atomically."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def write_csv(df, path):
+    """Write a DataFrame as CSV atomically (no index column)."""
+    atomic_write_text(path, df.to_csv(index=False))
+
+
+def figure_data_uri(fig, dpi=110):
+    """A matplotlib figure as a PNG data URI (for self-contained HTML)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return f"{v:.3e}" if (v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e5)) else f"{v:.6g}"
+    return html.escape(str(v))
+
+
+def html_table(df, status_column="passed", max_rows=None, left_columns=()):
+    """An HTML table of ``df``; rows with status_column False get class 'fail'."""
+    if max_rows is not None:
+        df = df.head(max_rows)
+    head = "".join(f"<th class='l'>{html.escape(str(c))}</th>" if c in left_columns
+                   else f"<th>{html.escape(str(c))}</th>" for c in df.columns)
+    rows = []
+    for _, r in df.iterrows():
+        cls = ""
+        if status_column in df.columns:
+            cls = " class='pass'" if bool(r[status_column]) else " class='fail'"
+        cells = []
+        for c in df.columns:
+            v = r[c]
+            if c == status_column:
+                cells.append(f"<td class='st'>{'pass' if bool(v) else 'FAIL'}</td>")
+            else:
+                cl = " class='l'" if c in left_columns else ""
+                cells.append(f"<td{cl}>{_fmt(v)}</td>")
+        rows.append(f"<tr{cls}>{''.join(cells)}</tr>")
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+
+
+def html_page(title, body_html):
+    """A complete self-contained HTML document."""
+    return (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+            f"<meta name='viewport' content='width=device-width,initial-scale=1'>"
+            f"<title>{html.escape(title)}</title><style>{CSS}</style></head>"
+            f"<body>{body_html}</body></html>")
+
+
+def worst_first(df):
+    """Failures first, then by decreasing rel_error/abs_error over tolerance."""
+    budget = df["tol_abs"] + df["tol_rel"] * df["scale"]
+    ratio = df["abs_error"] / budget.where(budget > 0, other=float("nan"))
+    return df.assign(error_over_tolerance=ratio).sort_values(
+        ["passed", "error_over_tolerance"], ascending=[True, False], kind="stable")
+
+
+def summarise(df, keys=("engine", "model", "quantity")):
+    """One row per (engine, model, quantity): worst errors, tolerance, pass/fail, count."""
+    rows = []
+    for key, g in df.groupby(list(keys), sort=False):
+        w = worst_first(g).iloc[0]
+        rows.append({**dict(zip(keys, key)), "n_compared": len(g),
+                     "worst_abs_error": g["abs_error"].max(),
+                     "worst_rel_error": g["rel_error"].max(),
+                     "worst_case": w["case"], "worst_entry": w["entry"],
+                     "tol_abs": w["tol_abs"], "tol_rel": w["tol_rel"],
+                     "passed": bool(g["passed"].all()), "reason": w["reason"]})
+    return pd.DataFrame(rows)
