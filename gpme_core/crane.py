@@ -62,6 +62,8 @@ class CraneParameters:
     slider_mass: float = 1.0                # kg
     slider_length: float = 0.5              # m
     slider_radius: float = 0.01             # m
+    slider_stroke: tuple = (-0.3, 0.5)      # m, range of z4 (slider tip behind/past arm tip)
+    arm_pitch_range: tuple = (-1.4, 1.4)    # rad, range of psi3
     # drive on psi2 (paper eq. 9)
     drive_torque: float = 1.0               # t_dr,0, N m
     drive_ramp_time: float = 5.0            # t_0, s
@@ -100,9 +102,10 @@ def build_crane(n_rfe=0, params=CraneParameters(), name=None):
     b.add_body(cylinder(p.column_mass, p.column_radius, p.column_height, axis=2,
                         com=(0.0, 0.0, 0.5 * p.column_height), inner_radius=p.column_inner_radius))
     b.add_joint("psi3", REVOLUTE, (0, 0, 1),
-                origin=tf.translation(0, 0, p.column_height) @ tf.rot_x(np.pi / 2), link="arm")
+                origin=tf.translation(0, 0, p.column_height) @ tf.rot_x(np.pi / 2), link="arm",
+                limits=p.arm_pitch_range)
     b.add_beam("arm", p.beam(), n_rfe)
-    b.add_joint("z4", PRISMATIC, (1, 0, 0), link="slider")
+    b.add_joint("z4", PRISMATIC, (1, 0, 0), link="slider", limits=p.slider_stroke)
     b.add_body(cylinder(p.slider_mass, p.slider_radius, p.slider_length, axis=0,
                         com=(-0.5 * p.slider_length, 0.0, 0.0)))
     b.add_frame("E")

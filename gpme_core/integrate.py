@@ -16,7 +16,7 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
-from .errors import GpmeError, ModelError, SimulationError
+from .errors import ConstraintError, GpmeError, ModelError, SimulationError
 
 METHODS = ("RK4", "RK45", "DOP853", "Radau")
 N_WORK = 3
@@ -53,6 +53,13 @@ def _check_state(model, t, y, n, dt=None):
             f"the run diverged at t = {t:.6g} s{hint}: {names} non-finite or above "
             f"{DIVERGENCE_LIMIT:g} (q = {np.round(q, 6).tolist()}, "
             f"q_dot = {np.round(q_dot, 6).tolist()})")
+    outside = model.limit_violations(q)
+    if outside:
+        raise ConstraintError(
+            f"at t = {t:.6g} s the programmed motion needs "
+            + ", ".join(f"{nm} = {v:.6g} {'rad' if model.is_revolute[model.index(nm)] else 'm'} "
+                        f"outside its range [{lo:g}, {hi:g}]" for nm, v, lo, hi in outside)
+            + ": the constraints cannot be met by this mechanism")
 
 
 def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress):

@@ -42,6 +42,9 @@ class Joint:
     spring_reference: rad or m, q_ref
     damping         : N m s/rad or N s/m, >= 0; damper generalized force -damping q_dot
     link            : name of the link this joint moves
+    limits          : (lower, upper) range of q in rad or m (the stroke of a slider, the
+                      travel of a hinge); a programmed motion that needs q outside it
+                      cannot be met and stops with a ConstraintError
     """
 
     name: str
@@ -52,6 +55,7 @@ class Joint:
     spring_reference: float = 0.0
     damping: float = 0.0
     link: str = ""
+    limits: tuple = (-np.inf, np.inf)
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,8 @@ class Model:
         self.stiffness = np.array([j.stiffness for j in self.joints], dtype=float)
         self.spring_reference = np.array([j.spring_reference for j in self.joints], dtype=float)
         self.damping = np.array([j.damping for j in self.joints], dtype=float)
+        self.lower_limits = np.array([j.limits[0] for j in self.joints], dtype=float)
+        self.upper_limits = np.array([j.limits[1] for j in self.joints], dtype=float)
         self._drive_indices = np.array([self._index.get(d.joint, -1) for d in self.drives], dtype=int)
         for arr in (self.origins, self.axes, self.generators, self.pseudo_inertias,
                     self.stiffness, self.spring_reference, self.damping, self.is_revolute):
@@ -149,6 +155,12 @@ class Model:
         for k, d in zip(self._drive_indices, self.drives):
             out[k] += d.function(t)
         return out
+
+    def limit_violations(self, q):
+        """[(name, value, lower, upper)] for every coordinate of q outside its limits."""
+        bad = (q < self.lower_limits) | (q > self.upper_limits)
+        return [(self.coordinate_names[k], float(q[k]), float(self.lower_limits[k]),
+                 float(self.upper_limits[k])) for k in np.flatnonzero(bad)]
 
     def stiffness_matrix(self):
         """(n, n) K of V = 1/2 (q - q_ref)^T K (q - q_ref)."""
@@ -214,6 +226,10 @@ def validate_model(model):
             v = getattr(j, fld)
             if not np.isfinite(v) or v < 0:
                 problems.append(f"{lbl}: {fld} must be finite and >= 0 ({unit}), got {v!r}")
+        lim = np.asarray(j.limits, dtype=float)
+        if lim.shape != (2,) or np.isnan(lim).any() or not lim[0] < lim[1]:
+            problems.append(f"{lbl}: limits must be (lower, upper) with lower < upper, "
+                            f"got {j.limits!r}")
         if not np.isfinite(j.spring_reference):
             problems.append(f"{lbl}: spring_reference must be finite, got {j.spring_reference!r}")
     link_names = set()
@@ -277,7 +293,7 @@ class ChainBuilder:
         return len(self._joints)
 
     def add_joint(self, name, kind, axis, origin=None, stiffness=0.0, spring_reference=0.0,
-                  damping=0.0, link=None):
+                  damping=0.0, link=None, limits=(-np.inf, np.inf)):
         """Add a joint (and its link); origin is relative to the current link frame."""
         origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
         if origin.shape == (4, 4):
@@ -285,7 +301,8 @@ class ChainBuilder:
         self._pending_origin = np.eye(4)
         axis = tuple(float(a) for a in np.ravel(axis))
         self._joints.append(Joint(name, kind, axis, origin, float(stiffness),
-                                  float(spring_reference), float(damping), link or name))
+                                  float(spring_reference), float(damping), link or name,
+                                  tuple(float(v) for v in limits)))
         self._link_names.append(link or name)
         self._link_h.append(None)
         return len(self._joints) - 1

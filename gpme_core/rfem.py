@@ -132,8 +132,8 @@ def discretise_beam(builder, name, beam, n_segments):
 
     The current link receives rigid element 0; n_segments sdes (3 revolute joints each)
     and rigid elements 1..n follow.  Afterwards the builder's next joint, body or frame
-    attaches at the beam tip (x = L in the frame of the last rigid element... expressed
-    relative to the last element: x = dl/2).
+    attaches at the beam tip: x = dl/2 in the frame of rigid element n (x = L on the
+    carrying link when n = 0).
     """
     problems = beam.problems(f"beam {name!r}")
     if not isinstance(n_segments, (int, np.integer)) or n_segments < 0:

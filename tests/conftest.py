@@ -1,0 +1,41 @@
+"""Shared fixtures: small models built from the public API."""
+import numpy as np
+import pytest
+
+from gpme_core import transforms as tf
+from gpme_core.crane import build_crane
+from gpme_core.inertia import cuboid
+from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
+
+
+@pytest.fixture(scope="session")
+def rng():
+    return np.random.default_rng(20261122)
+
+
+def spatial_arm():
+    """A 5-joint arm mixing revolute and prismatic joints with skewed axes and offsets."""
+    b = ChainBuilder("spatial_arm")
+    b.add_joint("q0", REVOLUTE, (0, 0, 1), stiffness=3.0, spring_reference=0.2, damping=0.1)
+    b.add_body(cuboid(2.0, (0.2, 0.3, 0.4), com=(0.05, -0.02, 0.1)))
+    b.add_joint("q1", PRISMATIC, np.array([1, 1, 0]) / np.sqrt(2), origin=tf.translation(0.1, 0, 0.3))
+    b.add_body(cuboid(1.0, (0.1, 0.5, 0.2), com=(0.0, 0.1, 0.0)))
+    b.add_joint("q2", REVOLUTE, np.array([0, 1, 1]) / np.sqrt(2),
+                origin=tf.translation(0, 0.2, 0.1) @ tf.rot_x(0.3) @ tf.rot_z(-0.4), damping=0.05)
+    b.add_body(cuboid(0.7, (0.6, 0.1, 0.1), com=(0.3, 0.0, 0.02)))
+    b.add_joint("q3", REVOLUTE, (1, 0, 0), origin=tf.translation(0.6, 0, 0) @ tf.rot_y(0.5))
+    b.add_body(cuboid(0.4, (0.3, 0.1, 0.05), com=(0.1, 0.05, 0.0)))
+    b.add_joint("q4", PRISMATIC, (0, 0, 1), origin=tf.translation(0.2, 0.1, 0), stiffness=50.0)
+    b.add_body(cuboid(0.3, (0.05, 0.05, 0.3), com=(0.0, 0.0, -0.1)))
+    b.add_frame("E", tf.translation(0.01, 0.02, 0.05))
+    return b.build()
+
+
+@pytest.fixture(scope="session")
+def arm():
+    return spatial_arm()
+
+
+@pytest.fixture(scope="session", params=[0, 2], ids=["crane_rigid", "crane_n2"])
+def crane(request):
+    return build_crane(request.param)
