@@ -56,10 +56,11 @@ def _check_state(model, t, y, n, dt=None):
     outside = model.limit_violations(q)
     if outside:
         raise ConstraintError(
-            f"at t = {t:.6g} s the programmed motion needs "
+            f"at t = {t:.6g} s the motion reaches "
             + ", ".join(f"{nm} = {v:.6g} {'rad' if model.is_revolute[model.index(nm)] else 'm'} "
                         f"outside its range [{lo:g}, {hi:g}]" for nm, v, lo, hi in outside)
-            + ": the constraints cannot be met by this mechanism")
+            + ": the mechanism cannot follow it (a programmed motion that needs this cannot "
+            "be met)")
 
 
 def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress):

@@ -220,7 +220,7 @@ def validate_model(model):
             problems.append(f"{lbl}: kind must be one of {JOINT_KINDS}, got {j.kind!r}")
         axis = np.asarray(j.axis, dtype=float)
         if axis.shape != (3,) or not np.all(np.isfinite(axis)) or abs(np.linalg.norm(axis) - 1) > 1e-9:
-            problems.append(f"{lbl}: axis must be a unit 3-vector, got {list(np.ravel(axis))}")
+            problems.append(f"{lbl}: axis must be a unit 3-vector, got {np.ravel(axis).tolist()}")
         problems += _rigid_transform_problems(f"{lbl} origin", j.origin)
         for fld, unit in (("stiffness", "N/m or N m/rad"), ("damping", "N s/m or N m s/rad")):
             v = getattr(j, fld)
