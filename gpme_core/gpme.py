@@ -141,8 +141,10 @@ class ProgrammedMotion:
         """Gamma = dq_dot_dc/dq_dot_ic = -A_dc^-1 A_ic (m, n - m), checking A_dc."""
         self._require_partition()
         a_dc = a[:, self.dc]
-        lu, piv = sla.lu_factor(a_dc, check_finite=False)
-        inv = sla.lu_solve((lu, piv), np.eye(self.n_constraints), check_finite=False)
+        try:
+            inv = np.linalg.inv(a_dc)    # m x m, m small: explicit inverse is cheapest
+        except np.linalg.LinAlgError:
+            inv = np.full_like(a_dc, np.inf)
         rcond = _rcond(a_dc, inv)
         if not rcond > SINGULAR_RCOND:
             qs = "" if q is None else f" at q = {np.round(q, 6).tolist()}"
@@ -152,7 +154,7 @@ class ProgrammedMotion:
                 f"{rcond:.2e} <= {SINGULAR_RCOND:.0e}){qs}: these coordinates cannot realise "
                 "the constraints here; choose other dependent coordinates or keep the "
                 "programmed path away from this configuration")
-        return -inv @ a[:, self.ic], (lu, piv)
+        return -inv @ a[:, self.ic], inv
 
     def solve(self, t, q, q_dot):
         """:class:`GpmeSolution` of the reduced equations at (t, q, q_dot)."""
@@ -169,7 +171,7 @@ class ProgrammedMotion:
             z = np.zeros(0)
             return GpmeSolution(t, q_ddot, z, z, np.zeros((0, n)), z, z, np.zeros(n), terms)
         phi, phi_dot, a, kappa = self.constraints(t, q, q_dot, terms.kin)
-        gamma, lu_dc = self.velocity_map(a, t, q)
+        gamma, inv_dc = self.velocity_map(a, t, q)
         # N^T X for X with rows ordered as q: X[ic] + Gamma^T X[dc]
         proj_m = terms.M[self.ic] + gamma.T @ terms.M[self.dc]
         proj_rhs = rhs[self.ic] + gamma.T @ rhs[self.dc]
@@ -185,7 +187,7 @@ class ProgrammedMotion:
             raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular at "
                                   f"q = {np.round(q, 6).tolist()}") from None
         reaction = terms.M @ q_ddot - rhs
-        lam = sla.lu_solve(lu_dc, reaction[self.dc], trans=1, check_finite=False)
+        lam = inv_dc.T @ reaction[self.dc]
         return GpmeSolution(t, q_ddot, phi, phi_dot, a, kappa, lam, a.T @ lam, terms)
 
     def accelerations(self, t, q, q_dot):
@@ -225,8 +227,8 @@ class ProgrammedMotion:
             phi, _, a, _ = self.constraints(t, q, q_dot)
             if np.max(np.abs(phi)) < tol:
                 break
-            _, (lu, piv) = self.velocity_map(a, t, q)
-            q[self.dc] -= sla.lu_solve((lu, piv), phi)
+            _, inv_dc = self.velocity_map(a, t, q)
+            q[self.dc] -= inv_dc @ phi
             if not np.all(np.isfinite(q)):
                 break
         else:
@@ -244,9 +246,9 @@ class ProgrammedMotion:
                 "needs " + ", ".join(f"{nm} = {v:.6g} {self._unit(nm)} outside its range "
                                      f"[{lo:g}, {hi:g}]" for nm, v, lo, hi in outside)
                 + "; the target is out of reach of the mechanism")
-        gamma, (lu, piv) = self.velocity_map(a, t, q)
+        gamma, inv_dc = self.velocity_map(a, t, q)
         phi_t = phi_dot - a @ q_dot
-        q_dot[self.dc] = gamma @ q_dot[self.ic] - sla.lu_solve((lu, piv), phi_t)
+        q_dot[self.dc] = gamma @ q_dot[self.ic] - inv_dc @ phi_t
         return q, q_dot
 
 
@@ -264,8 +266,7 @@ def _rcond(a, inv):
 
 def _solve_spd(m, b, t, q):
     try:
-        c = sla.cho_factor(m, check_finite=False)
+        return np.linalg.solve(m, b)
     except np.linalg.LinAlgError:
-        raise ConstraintError(f"at t = {t:.6g} s the mass matrix is not positive definite at "
+        raise ConstraintError(f"at t = {t:.6g} s the mass matrix is singular at "
                               f"q = {np.round(q, 6).tolist()}") from None
-    return sla.cho_solve(c, b, check_finite=False)
