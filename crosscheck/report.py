@@ -7,11 +7,10 @@ one was.  HTML pages are self-contained (inline CSS, images as data URIs).
 import base64
 import html
 import io
-import os
-import tempfile
-from pathlib import Path
 
 import pandas as pd
+
+from gpme_core.atomic import atomic_write_bytes, atomic_write_csv, atomic_write_text  # noqa: F401
 
 CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:1rem auto;
@@ -24,31 +23,9 @@ img{max-width:100%;height:auto}code{background:#f4f4f4;padding:0 .2rem}
 """
 
 
-def atomic_write_bytes(path, data):
-    """Write ``data`` to ``path`` atomically (temporary file + os.replace)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def atomic_write_text(path, text):
-    """Write UTF-8 ``text`` to ``path`` atomically."""
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
 def write_csv(df, path):
     """Write a DataFrame as CSV atomically (no index column)."""
-    atomic_write_text(path, df.to_csv(index=False))
+    atomic_write_csv(df, path)
 
 
 def figure_data_uri(fig, dpi=110):

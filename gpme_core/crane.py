@@ -57,7 +57,9 @@ class CraneParameters:
     steel_youngs_modulus: float = 210e9     # Pa
     steel_shear_modulus: float = 81e9       # Pa
     steel_density: float = 7850.0           # kg/m^3
-    arm_viscosity: float = 6e7              # Pa s, Kelvin-Voigt (about 1 % in the 1st mode)
+    arm_viscosity: float = 5e6              # Pa s, Kelvin-Voigt: 0.1 % of critical in the
+    #                                         1st bending mode; higher values overdamp the
+    #                                         stiff RFEM torsion modes and force RK4 to tiny dt
     # slider rod
     slider_mass: float = 1.0                # kg
     slider_length: float = 0.5              # m

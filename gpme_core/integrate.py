@@ -24,6 +24,42 @@ N_WORK = 3
 DIVERGENCE_LIMIT = 1e6
 
 
+def _rk4_growth(z):
+    return abs(1 + z + z * z / 2 + z ** 3 / 6 + z ** 4 / 24)
+
+
+def rk4_stability_step(eigenvalue):
+    """Largest h with |R(h lambda)| <= 1 for classical RK4 along the ray of ``eigenvalue``
+    (inf for lambda = 0); R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24."""
+    lam = complex(eigenvalue)
+    if abs(lam) == 0.0 or (lam.real > 0 and _rk4_growth(1e-9 * lam / abs(lam)) > 1):
+        return np.inf
+    lo, hi = 0.0, 4.0 / abs(lam)          # |z| <= 2.9 inside the stability region
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _rk4_growth(mid * lam) <= 1.0 + 1e-12 else (lo, mid)
+    return lo
+
+
+def suggest_rk4_step(model, q, safety=0.5):
+    """s: a stable RK4 step for small oscillations about q (springs, dampers, inertia).
+
+    Eigenvalues of the linearised first-order system [[0, I], [-M^-1 K, -M^-1 D]] at q
+    (gravity stiffness and constraints neglected: they are slow here); returns ``safety``
+    times the smallest RK4 stability step over them.  With Kelvin-Voigt RFEM dampers the
+    limit can come from the overdamped high modes (real eigenvalues ~ -eta/E omega^2).
+    """
+    from .dynamics import mass_matrix
+    n = model.n_coordinates
+    m_inv = np.linalg.inv(mass_matrix(model, q))
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -m_inv * model.stiffness[None, :]
+    a[n:, n:] = -m_inv * model.damping[None, :]
+    steps = [rk4_stability_step(lam) for lam in np.linalg.eigvals(a)]
+    return safety * float(min(steps))
+
+
 def _rhs_factory(system):
     model = system.model
     n = model.n_coordinates
@@ -125,7 +161,8 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
                  Phi_dot = 0 at t = 0 (otherwise start where given, as the paper does)
 
     Returns a DataFrame with columns t, <coordinate>, <coordinate>_dot, <constraint>,
-    <constraint>_dot, lambda_<constraint>, tau_<driven coordinate>, E_kin, E_pot,
+    <constraint>_dot, lambda_<constraint>, tau_<driven coordinate>, x_<frame>, y_<frame>,
+    z_<frame> (world position of every named frame, m), E_kin, E_pot,
     W_dissipated, W_drive, W_reaction, E_balance_error; run metadata in ``df.attrs``.
     """
     model = system.model
@@ -187,6 +224,8 @@ def history_frame(system, ts, ys):
     e_k = np.empty(len(ts))
     e_p = np.empty(len(ts))
     drive_idx = sorted({model.index(d.joint) for d in model.drives})
+    frames = sorted(model.frames)
+    frame_pos = np.empty((len(ts), len(frames), 3))
     taus = np.empty((len(ts), len(drive_idx)))
     for r, (t, y) in enumerate(zip(ts, ys)):
         q, q_dot = y[:n], y[n:2 * n]
@@ -195,12 +234,18 @@ def history_frame(system, ts, ys):
         e_k[r] = kinetic_energy(model, sol.terms.kin, q_dot)
         e_p[r] = potential_energy(model, q)
         taus[r] = sol.terms.t[drive_idx]
+        for j, fname in enumerate(frames):
+            fr = model.frames[fname]
+            frame_pos[r, j] = (sol.terms.kin.T[fr.link_index] @ fr.transform[:, 3])[:3]
     for j, nm in enumerate(system.constraint_names):
         cols[nm] = phis[:, j]
         cols[f"{nm}_dot"] = phis_dot[:, j]
         cols[f"lambda_{nm}"] = lams[:, j]
     for j, k in enumerate(drive_idx):
         cols[f"tau_{names[k]}"] = taus[:, j]
+    for j, fname in enumerate(frames):
+        for a, axis in enumerate("xyz"):
+            cols[f"{axis}_{fname}"] = frame_pos[:, j, a]
     cols["E_kin"] = e_k
     cols["E_pot"] = e_p
     cols["W_dissipated"] = ys[:, 2 * n]
