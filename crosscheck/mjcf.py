@@ -156,9 +156,10 @@ def mechanism_xml(model, programme, settings, indent="    "):
     q = p + "  "
     r = q + "  "
     foci = programme.foci_local()
-    solref = f'solref="{_f(s.timeconst)} {_f(s.dampratio)}"'
     imp = _f(s.impedance)
     solimp = f'solimp="{imp} {imp} 0.001 0.5 2"'
+    solref = f'solref="{_f(s.timeconst)} {_f(s.dampratio)}"'
+    solref_yoke = f'solref="{_f(s.yoke_timeconst or s.timeconst)} {_f(s.dampratio)}"'
     mf = _f(s.follower_mass)
     world = [
         f"{p}<!-- auxiliary mechanism (crosscheck/mujoco_mechanism.py): enforces "
@@ -196,7 +197,7 @@ def mechanism_xml(model, programme, settings, indent="    "):
     offset = programme.string_length - mech.string_length_at(programme, p_e0, z0)
     equality = [
         f'{p}<connect name="aux_scotch_yoke" site1="aux_crank_pin" site2="aux_yoke_slot" '
-        f"{solref} {solimp}/>",
+        f"{solref_yoke} {solimp}/>",
         f'{p}<connect name="{programme.names[1]}" site1="{programme.frame}" site2="aux_puck" '
         f"{solref} {solimp}/>",
         f'{p}<tendon name="{programme.names[0]}" tendon1="aux_ellipse_string" '
@@ -253,7 +254,9 @@ def mjcf_text(model, dt=1e-4, constraints=None, settings=None, initial_state=Non
         lines += world
     lines.append("  </worldbody>")
     if tendon:
-        lines += ["  <tendon>", *tendon, "  </tendon>", "  <equality>", *equality, "  </equality>"]
+        lines += ["  <tendon>", *tendon, "  </tendon>"]
+    if equality:
+        lines += ["  <equality>", *equality, "  </equality>"]
     if model.drives:
         lines.append("  <actuator>")
         for d in model.drives:

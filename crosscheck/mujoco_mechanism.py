@@ -55,6 +55,8 @@ class MechanismSettings:
     crank_armature : kg m^2, so that the follower's reactions barely change the crank speed
     crank_offset   : m, crank axis distance along world x from the ellipse centre (only
                      moves it out of the way in a viewer; no effect on the dynamics)
+    yoke_timeconst : s, solref time constant of the Scotch-yoke connect; None = timeconst
+                     (kept separate so the end-effector constraints can be softened alone)
     """
 
     timeconst: float = 1e-4
@@ -65,6 +67,7 @@ class MechanismSettings:
     follower_mass: float = 1e3
     crank_armature: float = 1e12
     crank_offset: float = 1.5
+    yoke_timeconst: float = None
 
     def problems(self):
         """Human-readable problems (empty when valid)."""
@@ -77,6 +80,10 @@ class MechanismSettings:
         if not (0.0 < self.impedance <= 0.9999):
             out.append(f"mechanism impedance must be in (0, 0.9999] (MuJoCo's solimp range), "
                        f"got {self.impedance!r}")
+        if self.yoke_timeconst is not None and not (np.isfinite(self.yoke_timeconst)
+                                                    and self.yoke_timeconst > 0):
+            out.append(f"mechanism yoke_timeconst must be positive (s) or None, got "
+                       f"{self.yoke_timeconst!r}")
         if not np.isfinite(self.crank_offset):
             out.append(f"mechanism crank_offset must be finite (m), got {self.crank_offset!r}")
         return out
