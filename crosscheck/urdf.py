@@ -7,8 +7,9 @@ one to one (docs/urdf.md has the full table):
 * joint k          -> a ``revolute`` or ``prismatic`` joint named after coordinate k,
                       parent = link k-1 (``world`` for k = 0), child = link k,
                       <origin> = ``Joint.origin`` (xyz m, rpy rad), <axis> = ``Joint.axis``,
-                      <dynamics damping> = ``Joint.damping``; gpme has no joint limits,
-                      so <limit> holds +-UNLIMITED (URDF requires it and readers ignore it);
+                      <dynamics damping> = ``Joint.damping``, <limit lower upper> =
+                      ``Joint.limits`` with an infinite end written as -+UNLIMITED (URDF
+                      needs finite numbers; the reader maps |limit| >= UNLIMITED back to inf);
 * link k           -> a link with <inertial> (com in the link frame, rpy 0, inertia about
                       the com in link axes), or no <inertial> when massless (the two
                       intermediate frames of an RFEM spring-damping element);
@@ -50,8 +51,9 @@ ROOT_LINK = "world"
 SIDE_SUFFIX = ".gpme.json"
 SIDE_FORMAT = "gpme-urdf-side-file"
 SIDE_VERSION = 1
-# rad or m: the <limit> written for gpme's unlimited joints (URDF requires one for
-# revolute and prismatic joints); 1e6 rad is ~160 000 turns, never reached.
+# rad or m: the <limit> written for an infinite end of a gpme joint range (URDF needs a
+# finite one for revolute and prismatic joints); 1e6 rad is ~160 000 turns, never reached.
+# Also written as effort (N, N m) and velocity (m/s, rad/s) limits, which gpme does not have.
 UNLIMITED = 1.0e6
 # kg and kg m^2: MuJoCo's importer lower bound for the massless links (MuJoCo rejects a
 # moving body with mass <= 1e-15).  MuJoCo-only: gpme and Pinocchio read zero mass.
@@ -150,7 +152,8 @@ def urdf_documents(model, include_drives=True, urdf_name=None):
         ET.SubElement(j, "child", link=link.name)
         _origin(j, joint.origin)
         ET.SubElement(j, "axis", xyz=_vec(joint.axis))
-        ET.SubElement(j, "limit", lower=_num(-UNLIMITED), upper=_num(UNLIMITED),
+        lower, upper = (float(np.clip(v, -UNLIMITED, UNLIMITED)) for v in joint.limits)
+        ET.SubElement(j, "limit", lower=_num(lower), upper=_num(upper),
                       effort=_num(UNLIMITED), velocity=_num(UNLIMITED))
         ET.SubElement(j, "dynamics", damping=_num(joint.damping), friction="0")
         lk = ET.SubElement(robot, "link", name=link.name)
@@ -235,7 +238,8 @@ def _read_inertial(link_el, problems):
     if mass_el is None:
         problems.append(f"{label}: missing <mass value=...>")
         return None
-    mass = _floats(mass_el.get("value"), 1, f"{label} <mass value>", problems, (np.nan,))[0]
+    mass = float(_floats(mass_el.get("value"), 1, f"{label} <mass value>", problems,
+                         (np.nan,))[0])
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     if inertia_el is None:
         problems.append(f"{label}: missing <inertia {' '.join(keys)}>")
@@ -264,6 +268,7 @@ class _UrdfJoint:
     origin: np.ndarray
     axis: np.ndarray
     damping: float
+    limits: tuple
 
 
 def _read_joint(el, link_names, problems):
@@ -294,6 +299,9 @@ def _read_joint(el, link_names, problems):
     origin = _origin_transform(el, label, problems)
     axis = np.array((1.0, 0.0, 0.0))
     damping = 0.0
+    limits = (-np.inf, np.inf)
+    if jtype in ("revolute", "prismatic"):
+        limits = _read_limits(el, label, problems)
     if jtype != "fixed":
         ax = el.find("axis")
         if ax is not None:
@@ -305,17 +313,34 @@ def _read_joint(el, link_names, problems):
             axis = axis / norm
         dyn = el.find("dynamics")
         if dyn is not None:
-            damping = _floats(dyn.get("damping", "0"), 1, f"{label} <dynamics damping>",
-                              problems, (0,))[0]
-            friction = _floats(dyn.get("friction", "0"), 1, f"{label} <dynamics friction>",
-                               problems, (0,))[0]
+            damping = float(_floats(dyn.get("damping", "0"), 1, f"{label} <dynamics damping>",
+                                    problems, (0,))[0])
+            friction = float(_floats(dyn.get("friction", "0"), 1,
+                                     f"{label} <dynamics friction>", problems, (0,))[0])
             if damping < 0:
                 problems.append(f"{label}: <dynamics damping> must be >= 0, got {damping!r}")
             if friction != 0.0:
                 problems.append(f"{label}: <dynamics friction={friction!r}> is not supported "
                                 "(gpme has no Coulomb friction); set it to 0")
     kind = "fixed" if jtype == "fixed" else _READ_KIND[jtype]
-    return _UrdfJoint(name, kind, ends["parent"], ends["child"], origin, axis, float(damping))
+    return _UrdfJoint(name, kind, ends["parent"], ends["child"], origin, axis, float(damping),
+                      limits)
+
+
+def _read_limits(el, label, problems):
+    """(lower, upper) rad or m of a <limit>; a missing end or |value| >= UNLIMITED is inf."""
+    lim = el.find("limit")
+    if lim is None:
+        return (-np.inf, np.inf)
+    out = []
+    for key, sign in (("lower", -1.0), ("upper", 1.0)):
+        v = _floats(lim.get(key), 1, f"{label} <limit {key}>", problems, (sign * np.inf,))[0]
+        out.append(sign * np.inf if abs(v) >= UNLIMITED else float(v))
+    if not out[0] < out[1]:
+        problems.append(f"{label}: <limit lower={out[0]!r} upper={out[1]!r}> must have "
+                        "lower < upper")
+        return (-np.inf, np.inf)
+    return tuple(out)
 
 
 def load_side_file(path):
@@ -553,7 +578,7 @@ def parse_urdf(text, side=None, flexible=None, massless_links=(), gravity=None, 
             builder.add_joint(j.name, j.kind, j.axis, origin=after @ t_parent @ j.origin,
                               stiffness=spring.get("stiffness", 0.0),
                               spring_reference=spring.get("spring_reference", 0.0),
-                              damping=j.damping, link=j.child)
+                              damping=j.damping, link=j.child, limits=j.limits)
             after = np.eye(4)
             if j.child in flexible:
                 beam, n = flexible[j.child]
