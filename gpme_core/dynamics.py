@@ -18,7 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import chain_kinematics, twist_velocities, velocity_product_accelerations
+from . import fast
+from .kinematics import (ChainKinematics, chain_kinematics, twist_velocities,
+                         velocity_product_accelerations)
 
 
 def _as_kin(model, q_or_kin):
@@ -141,7 +143,18 @@ class DynamicsTerms:
 
 
 def dynamics_terms(model, t, q, q_dot):
-    """All terms at once (one forward-kinematics pass)."""
+    """All terms at once (one forward-kinematics pass).
+
+    Uses the compiled kernels of gpme_core.fast (same formulas, equal to the numpy
+    functions above to round-off) unless GPME_NO_JIT=1."""
+    q = np.asarray(q, dtype=float)
+    q_dot = np.asarray(q_dot, dtype=float)
+    if fast.ENABLED:
+        t_all, s_all = fast.chain(model.origins, model.generators, model.is_revolute, q)
+        kin = ChainKinematics(q, t_all, s_all)
+        m, h, g = fast.terms(t_all, s_all, model.pseudo_inertias, _gamma(model), q_dot)
+        return DynamicsTerms(kin, m, h, g, spring_forces(model, q), damper_forces(model, q_dot),
+                             drive_forces(model, t))
     kin = chain_kinematics(model, q)
     return DynamicsTerms(kin, mass_matrix(model, kin), velocity_product_terms(model, kin, q_dot),
                          gravity_forces(model, kin), spring_forces(model, q),
