@@ -15,6 +15,9 @@ def atomic_write_bytes(path, data):
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)   # mkstemp makes 0600; a report is for reading
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -1,0 +1,44 @@
+"""What a report must name so it can be trusted later: versions, machine, date, commit."""
+import os
+import platform
+import subprocess
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+
+
+def _version(dist):
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def git_commit():
+    """HEAD commit of the source tree (with '-dirty' for uncommitted changes) or 'unknown'."""
+    src = Path(__file__).resolve().parent.parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=src, capture_output=True,
+                              text=True, timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=src, capture_output=True, text=True, timeout=10).stdout.strip()
+        return head + ("-dirty" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def environment(**extra):
+    """Dict of versions, machine, date and commit (plus ``extra``)."""
+    return {
+        "date_utc": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+        "git_commit": git_commit(),
+        "versions": {"gpme": _version("gpme"), "pinocchio (pin)": _version("pin"),
+                     "mujoco": _version("mujoco"), "numpy": _version("numpy"),
+                     "scipy": _version("scipy"), "numba": _version("numba"),
+                     "python": sys.version.split()[0]},
+        "machine": {"node": platform.node(), "platform": platform.platform(),
+                    "processor": platform.processor() or platform.machine(),
+                    "cpus": os.cpu_count()},
+        **extra,
+    }
