@@ -52,13 +52,15 @@ class EllipseConstraint(PointConstraint):
         self.a, self.b, self.center = float(a), float(b), np.asarray(center, dtype=float)
         self.frame, self.name = frame, name
         self._w = np.array([1.0 / self.a ** 2, 1.0 / self.b ** 2, 0.0])
+        self._hess = np.diag(2.0 * self._w)
+        self._zero = np.zeros(3)
 
     def local_terms(self, p, t):
-        r = p.copy()
-        r[:2] -= self.center
-        r[2] = 0.0
-        phi = float(self._w @ (r * r)) - 1.0
-        return phi, 2.0 * self._w * r, np.diag(2.0 * self._w), 0.0, np.zeros(3), 0.0
+        rx, ry = p[0] - self.center[0], p[1] - self.center[1]
+        w = self._w
+        phi = w[0] * rx * rx + w[1] * ry * ry - 1.0
+        return (phi, np.array([2.0 * w[0] * rx, 2.0 * w[1] * ry, 0.0]), self._hess, 0.0,
+                self._zero, 0.0)
 
 
 class CoordinateProgramme(PointConstraint):
@@ -73,11 +75,13 @@ class CoordinateProgramme(PointConstraint):
             raise ModelError(f"programme {name!r}: axis must be 0, 1 or 2, got {axis!r}")
         self.function, self.axis, self.frame, self.name = function, axis, frame, name
         self._e = np.eye(3)[axis]
+        self._zero_hess = np.zeros((3, 3))
+        self._zero = np.zeros(3)
 
     def local_terms(self, p, t):
         f = self.function
-        return (float(p[self.axis]) - f.value(t), self._e, np.zeros((3, 3)), -f.rate(t),
-                np.zeros(3), -f.acceleration(t))
+        return (float(p[self.axis]) - f.value(t), self._e, self._zero_hess, -f.rate(t),
+                self._zero, -f.acceleration(t))
 
 
 class SympyPointConstraint(PointConstraint):
@@ -128,7 +132,7 @@ class _BoundPointConstraint:
         row = grad @ pk.jacobian
         p_dot = pk.velocity
         phi_dot = float(grad @ p_dot) + phi_t
-        kappa = float(grad @ pk.drift + p_dot @ hess @ p_dot + 2.0 * grad_t @ p_dot + phi_tt)
+        kappa = float(grad @ pk.drift + p_dot @ (hess @ p_dot) + 2.0 * (grad_t @ p_dot) + phi_tt)
         return phi, row, phi_dot, kappa
 
 

@@ -57,7 +57,7 @@ def velocity_product_terms(model, q, q_dot):
 
 
 def _gamma(model):
-    return np.append(model.gravity, 0.0)
+    return model.gamma
 
 
 def gravity_forces(model, q):
@@ -150,11 +150,12 @@ def dynamics_terms(model, t, q, q_dot):
     q = np.asarray(q, dtype=float)
     q_dot = np.asarray(q_dot, dtype=float)
     if fast.ENABLED:
-        t_all, s_all = fast.chain(model.origins, model.generators, model.is_revolute, q)
-        kin = ChainKinematics(q, t_all, s_all)
-        m, h, g = fast.terms(t_all, s_all, model.pseudo_inertias, _gamma(model), q_dot)
-        return DynamicsTerms(kin, m, h, g, spring_forces(model, q), damper_forces(model, q_dot),
-                             drive_forces(model, t))
+        t_all, s_all, m, h, g = fast.chain_and_terms(
+            model.origins, model.generators, model.is_revolute, model.pseudo_inertias,
+            model.gamma, q, q_dot)
+        return DynamicsTerms(ChainKinematics(q, t_all, s_all), m, h, g,
+                             model.stiffness * (q - model.spring_reference),
+                             model.damping * q_dot, model.drive_forces(t))
     kin = chain_kinematics(model, q)
     return DynamicsTerms(kin, mass_matrix(model, kin), velocity_product_terms(model, kin, q_dot),
                          gravity_forces(model, kin), spring_forces(model, q),

@@ -156,3 +156,11 @@ def point(t_all, s_all, q_dot, link, r_local):
         v_prev = v_prev + w
     drift = _mv(b, rw)[:3]
     return rw[:3].copy(), _mv(jac, q_dot), jac, drift
+
+
+@_jit
+def chain_and_terms(origins, generators, is_revolute, pseudo_inertias, gamma, q, q_dot):
+    """(T, S, M, h, g) in one compiled call (see :func:`chain` and :func:`terms`)."""
+    t_all, s_all = chain(origins, generators, is_revolute, q)
+    m, h, g = terms(t_all, s_all, pseudo_inertias, gamma, q_dot)
+    return t_all, s_all, m, h, g

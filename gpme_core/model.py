@@ -104,6 +104,8 @@ class Model:
         self.frames = dict(frames)
         self.drives = tuple(drives)
         self.gravity = np.array(gravity, dtype=float)
+        # (4,) homogeneous gravity (g_x, g_y, g_z, 0) used by the trace-form gravity terms
+        self.gamma = np.append(self.gravity, 0.0) if self.gravity.shape == (3,) else np.zeros(4)
         self.flexible_links = tuple(flexible_links)
         n = len(self.joints)
         self.n_coordinates = n
@@ -124,7 +126,8 @@ class Model:
         self.lower_limits = np.array([j.limits[0] for j in self.joints], dtype=float)
         self.upper_limits = np.array([j.limits[1] for j in self.joints], dtype=float)
         self._drive_indices = np.array([self._index.get(d.joint, -1) for d in self.drives], dtype=int)
-        for arr in (self.origins, self.axes, self.generators, self.pseudo_inertias,
+        for arr in (self.gravity, self.gamma, self.origins, self.axes, self.generators,
+                    self.pseudo_inertias,
                     self.stiffness, self.spring_reference, self.damping, self.is_revolute):
             arr.setflags(write=False)
 
