@@ -1,0 +1,464 @@
+"""What a sweep runs: the points (grid, explicit list or Latin-hypercube sample) over crane
+parameters and n_rfe, the run settings, the safe-region limits and the heat-map axes.
+
+A spec comes from a dict (read from a TOML or YAML file, or built by the command line) and
+is validated once, here: :class:`SweepSpecError` lists every problem found.  Schema::
+
+    mode = "grid"                  # "grid" | "list" | "lhs"
+    [parameters]                   # grid: values per parameter, the Cartesian product is run
+    A = [0.2, 0.35, 0.5]           #   a list, one number, {start, stop, num} or "start:stop:num"
+    T = "1.5:3.5:5"
+    # lhs: a range per parameter, [low, high] or {low, high} or "low:high"
+    # samples = 20                 # lhs only: number of points
+    # seed = 0                     # lhs only: seed of the sample
+    # points = [{A = 0.3, T = 2.0}, ...]   # list only: the points themselves
+    [run]                          # settings that change the results (part of each point's key)
+    t_end = 6.0                    # s, simulated time of each run
+    n_rfe = 1                      # RFEM segments when n_rfe is not swept (0 = rigid arm only)
+    transient = 1.0                # s, start of the window of the |Phi| and spectrum metrics
+    output_dt = 2e-3               # s, spacing of the recorded rows (Nyquist 250 Hz)
+    dt = 0                         # s, RK4 step; 0 = per point from suggest_rk4_step
+    min_frequency_hz = 2.0         # Hz, lower edge of the vibration-frequency search
+    phi_tolerance = 1e-3           # largest |Phi| after the transient that counts as met
+    [limits]                       # safe region: metric name = largest allowed value
+    dev_peak_m = 0.01
+    drive_psi3_peak_Nm = 30.0
+    [plot]
+    x = "A"                        # heat-map axes (default: the first two swept parameters)
+    y = "T"
+
+Parameter names are CraneParameters fields (amplitude, period, ellipse_a, ...) or the
+aliases in :data:`ALIASES` (A, T, a, b, E, ...), plus n_rfe.  Tables use the field names.
+"""
+import dataclasses
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gpme_core.crane import CraneParameters
+from gpme_core.errors import ModelError
+
+from .metrics import METRICS
+
+MODES = ("grid", "list", "lhs")
+# short names accepted everywhere a parameter is named -> CraneParameters field
+ALIASES = {"A": "amplitude", "T": "period", "a": "ellipse_a", "b": "ellipse_b",
+           "E": "steel_youngs_modulus", "beam_stiffness": "steel_youngs_modulus",
+           "youngs_modulus": "steel_youngs_modulus", "t_dr0": "drive_torque",
+           "t0": "drive_ramp_time", "s_z": "support_stiffness", "d_z": "support_damping"}
+# field -> (unit, smallest valid value, whether that value itself is allowed)
+PARAMETERS = {
+    "amplitude": ("m", 0.0, True),
+    "period": ("s", 0.0, False),
+    "ellipse_a": ("m", 0.0, False),
+    "ellipse_b": ("m", 0.0, False),
+    "z0": ("m", -math.inf, False),
+    "drive_torque": ("N m", -math.inf, False),
+    "drive_ramp_time": ("s", 0.0, False),
+    "support_stiffness": ("N/m", 0.0, False),
+    "support_damping": ("N s/m", 0.0, True),
+    "steel_youngs_modulus": ("Pa", 0.0, False),
+    "steel_shear_modulus": ("Pa", 0.0, False),
+    "arm_diameter": ("m", 0.0, False),
+    "arm_length": ("m", 0.0, False),
+    "arm_viscosity": ("Pa s", 0.0, True),
+    "slider_mass": ("kg", 0.0, False),
+    "n_rfe": ("", 0, True),
+}
+RUN_DEFAULTS = {"t_end": 6.0, "n_rfe": 1, "transient": 1.0, "output_dt": 2e-3, "dt": 0.0,
+                "min_frequency_hz": 2.0, "phi_tolerance": 1e-3}
+TOP_KEYS = ("mode", "parameters", "points", "samples", "seed", "run", "limits", "plot")
+# more points than this is almost certainly a typo in a grid (hours of runs per point)
+MAX_POINTS = 100_000
+
+
+class SweepSpecError(ModelError):
+    """A sweep description is invalid; the message lists every problem found."""
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Settings every point is run with (see the module docstring for units)."""
+
+    t_end: float = RUN_DEFAULTS["t_end"]
+    n_rfe: int = RUN_DEFAULTS["n_rfe"]
+    transient: float = RUN_DEFAULTS["transient"]
+    output_dt: float = RUN_DEFAULTS["output_dt"]
+    dt: float = RUN_DEFAULTS["dt"]
+    min_frequency_hz: float = RUN_DEFAULTS["min_frequency_hz"]
+    phi_tolerance: float = RUN_DEFAULTS["phi_tolerance"]
+
+    def as_dict(self):
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep.
+
+    points : tuple of dicts {field name: value}, only the values that differ from
+             CraneParameters() defaults by being swept; n_rfe always present (int)
+    swept  : names (field names, n_rfe) that vary over the points
+    """
+
+    mode: str
+    points: tuple
+    swept: tuple
+    run: RunSettings
+    limits: dict = field(default_factory=dict)
+    plot_x: str = None
+    plot_y: str = None
+
+
+def canonical(name):
+    """Field name of a parameter given by field name or alias (unknown names unchanged)."""
+    return ALIASES.get(name, name)
+
+
+def unit_of(name):
+    """Unit string of a parameter or metric column."""
+    name = canonical(name)
+    if name in PARAMETERS:
+        return PARAMETERS[name][0]
+    return METRICS.get(name, ("",))[0]
+
+
+def load_spec(path):
+    """SweepSpec from a TOML (.toml) or YAML (.yaml, .yml) file."""
+    return spec_from_dict(read_spec_file(path))
+
+
+def read_spec_file(path):
+    """The raw dict of a TOML or YAML sweep file (validated later by spec_from_dict)."""
+    path = Path(path)
+    if not path.is_file():
+        raise SweepSpecError(f"sweep file {str(path)!r} does not exist")
+    suffix = path.suffix.lower()
+    text = path.read_text(encoding="utf-8")
+    try:
+        if suffix == ".toml":
+            import tomllib
+            data = tomllib.loads(text)
+        elif suffix in (".yaml", ".yml"):
+            import yaml
+            data = yaml.safe_load(text) or {}
+        else:
+            raise SweepSpecError(f"sweep file {str(path)!r}: expected a .toml, .yaml or .yml "
+                                 f"file, got suffix {suffix!r}")
+    except SweepSpecError:
+        raise
+    except Exception as exc:     # the parsers' own errors, with their line numbers
+        raise SweepSpecError(f"sweep file {str(path)!r} cannot be parsed: {exc}") from exc
+    if not isinstance(data, dict):
+        raise SweepSpecError(f"sweep file {str(path)!r}: expected a table/mapping at the top, "
+                             f"got {type(data).__name__}")
+    return data
+
+
+def _number(value):
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got {value!r}")
+    if isinstance(value, str):
+        return float(value.strip())
+    return float(value)
+
+
+def _grid_values(name, value, problems):
+    """Values of one grid axis from a list, a number, {start, stop, num} or 'a:b:n'."""
+    try:
+        if isinstance(value, str) and ":" in value:
+            parts = value.split(":")
+            if len(parts) != 3:
+                raise ValueError(f"expected 'start:stop:num', got {value!r}")
+            value = {"start": parts[0], "stop": parts[1], "num": parts[2]}
+        elif isinstance(value, str) and "," in value:
+            value = [v for v in value.split(",") if v.strip()]
+        if isinstance(value, dict):
+            extra = set(value) - {"start", "stop", "num"}
+            if extra or len(value) != 3:
+                raise ValueError(f"expected keys start, stop, num, got {sorted(value)}")
+            num = _number(value["num"])
+            if num != int(num) or num < 1:
+                raise ValueError(f"num must be a positive integer, got {value['num']!r}")
+            return [float(v) for v in np.linspace(_number(value["start"]),
+                                                  _number(value["stop"]), int(num))]
+        if isinstance(value, (list, tuple)):
+            if not value:
+                raise ValueError("empty list of values")
+            return [_number(v) for v in value]
+        return [_number(value)]
+    except (ValueError, TypeError) as exc:
+        problems.append(f"parameters.{name}: {exc}")
+        return []
+
+
+def _range(name, value, problems):
+    """(low, high) of one Latin-hypercube axis from [lo, hi], {low, high} or 'lo:hi'."""
+    try:
+        if isinstance(value, str):
+            value = value.split(":")
+        if isinstance(value, dict):
+            if set(value) != {"low", "high"}:
+                raise ValueError(f"expected keys low, high, got {sorted(value)}")
+            value = [value["low"], value["high"]]
+        if not isinstance(value, (list, tuple)) or len(value) != 2:
+            raise ValueError(f"expected a range [low, high] or 'low:high', got {value!r}")
+        lo, hi = _number(value[0]), _number(value[1])
+        if not lo <= hi:
+            raise ValueError(f"low must be <= high, got [{lo:g}, {hi:g}]")
+        return lo, hi
+    except (ValueError, TypeError) as exc:
+        problems.append(f"parameters.{name}: {exc}")
+        return None
+
+
+def _check_value(name, value, where, problems):
+    unit, lo, inclusive = PARAMETERS[name]
+    if name == "n_rfe":
+        if value != int(value) or value < 0:
+            problems.append(f"{where}: n_rfe must be an integer >= 0, got {value!r}")
+        return
+    if not math.isfinite(value) or value < lo or (value == lo and not inclusive):
+        rel = ">=" if inclusive else ">"
+        problems.append(f"{where}: {name} must be finite and {rel} {lo:g} {unit}, "
+                        f"got {value!r}")
+
+
+def _check_name(name, where, problems):
+    c = canonical(name)
+    if c not in PARAMETERS:
+        problems.append(f"{where}: unknown parameter {name!r}; valid: "
+                        f"{sorted(PARAMETERS)} or aliases {sorted(ALIASES)}")
+        return None
+    return c
+
+
+def spec_from_dict(data):
+    """Validated :class:`SweepSpec` from a dict of the schema in the module docstring."""
+    problems = []
+    data = dict(data or {})
+    for key in data:
+        if key not in TOP_KEYS:
+            problems.append(f"unknown key {key!r}; valid keys: {list(TOP_KEYS)}")
+    mode = data.get("mode", "grid")
+    if mode not in MODES:
+        problems.append(f"mode must be one of {MODES}, got {mode!r}")
+    run = _run_settings(data.get("run") or {}, problems)
+    parameters = data.get("parameters") or {}
+    if not isinstance(parameters, dict):
+        problems.append(f"parameters must be a table name = values, got {parameters!r}")
+        parameters = {}
+    points = []
+    if mode == "grid":
+        points = _grid_points(parameters, problems)
+    elif mode == "lhs":
+        points = _lhs_points(parameters, data.get("samples"), data.get("seed", 0), problems)
+    elif mode == "list":
+        points = _list_points(data.get("points"), problems)
+        if parameters:
+            problems.append("mode 'list' takes its points from 'points', not 'parameters'")
+    for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
+        if key in data and mode != wanted:
+            problems.append(f"{key!r} is only used with mode {wanted!r} (mode is {mode!r})")
+    for k, pt in enumerate(points):
+        for name, value in pt.items():
+            _check_value(name, value, f"point {k}", problems)
+        pt.setdefault("n_rfe", run.n_rfe)
+    swept = _swept(points)
+    limits = _limits(data.get("limits") or {}, problems)
+    plot = data.get("plot") or {}
+    plot_x, plot_y = _plot_axes(plot, swept, problems)
+    if len(points) > MAX_POINTS:
+        problems.append(f"{len(points)} points; at most {MAX_POINTS} (check the grid)")
+    if problems:
+        raise SweepSpecError(problems)
+    for pt in points:
+        pt["n_rfe"] = int(pt["n_rfe"])
+    return SweepSpec(mode, tuple(points), swept, run, limits, plot_x, plot_y)
+
+
+def _run_settings(run, problems):
+    if not isinstance(run, dict):
+        problems.append(f"run must be a table of settings, got {run!r}")
+        return RunSettings()
+    values = dict(RUN_DEFAULTS)
+    for key, value in run.items():
+        if key not in RUN_DEFAULTS:
+            problems.append(f"run.{key}: unknown setting; valid: {sorted(RUN_DEFAULTS)}")
+            continue
+        try:
+            values[key] = _number(value)
+        except (ValueError, TypeError):
+            problems.append(f"run.{key}: expected a number, got {value!r}")
+    v = values
+    for key in ("t_end", "output_dt", "phi_tolerance"):
+        if not (math.isfinite(v[key]) and v[key] > 0):
+            problems.append(f"run.{key} must be > 0, got {v[key]!r}")
+    for key in ("transient", "dt", "min_frequency_hz"):
+        if not (math.isfinite(v[key]) and v[key] >= 0):
+            problems.append(f"run.{key} must be >= 0, got {v[key]!r}")
+    if not (v["n_rfe"] == int(v["n_rfe"]) and v["n_rfe"] >= 0):
+        problems.append(f"run.n_rfe must be an integer >= 0, got {v['n_rfe']!r}")
+    if math.isfinite(v["transient"]) and math.isfinite(v["t_end"]) and \
+            v["transient"] >= v["t_end"]:
+        problems.append(f"run.transient ({v['transient']:g} s) must be shorter than run.t_end "
+                        f"({v['t_end']:g} s): the metrics after the transient need data")
+    if math.isfinite(v["output_dt"]) and math.isfinite(v["t_end"]) and \
+            v["output_dt"] > 0.1 * v["t_end"]:
+        problems.append(f"run.output_dt ({v['output_dt']:g} s) must be at most a tenth of "
+                        f"run.t_end ({v['t_end']:g} s)")
+    if 0 < v["dt"] and math.isfinite(v["dt"]) and v["dt"] > v["output_dt"]:
+        problems.append(f"run.dt ({v['dt']:g} s) must not exceed run.output_dt "
+                        f"({v['output_dt']:g} s)")
+    try:
+        v["n_rfe"] = int(v["n_rfe"])
+    except (ValueError, OverflowError):
+        pass
+    return RunSettings(**v)
+
+
+def _grid_points(parameters, problems):
+    if not parameters:
+        problems.append("mode 'grid' needs at least one parameter in 'parameters'")
+        return []
+    axes = {}
+    for name, value in parameters.items():
+        c = _check_name(name, f"parameters.{name}", problems)
+        if c is None:
+            continue
+        if c in axes:
+            problems.append(f"parameters.{name}: {c} given twice")
+        axes[c] = _grid_values(name, value, problems)
+    if not all(axes.values()) or not axes:
+        return []
+    names = list(axes)
+    return [dict(zip(names, combo)) for combo in itertools.product(*axes.values())]
+
+
+def _lhs_points(parameters, samples, seed, problems):
+    if not parameters:
+        problems.append("mode 'lhs' needs at least one parameter range in 'parameters'")
+    if samples is None or isinstance(samples, bool) or not isinstance(samples, (int, float)) \
+            or samples != int(samples) or samples < 1:
+        problems.append(f"mode 'lhs' needs samples = a positive integer, got {samples!r}")
+        samples = None
+    if isinstance(seed, bool) or not isinstance(seed, (int, float)) or seed != int(seed) \
+            or seed < 0:
+        problems.append(f"seed must be an integer >= 0, got {seed!r}")
+        seed = None
+    ranges = {}
+    for name, value in (parameters or {}).items():
+        c = _check_name(name, f"parameters.{name}", problems)
+        if c is None:
+            continue
+        r = _range(name, value, problems)
+        if r is not None:
+            ranges[c] = r
+    if samples is None or seed is None or not ranges or len(ranges) != len(parameters):
+        return []
+    from scipy.stats import qmc
+    u = qmc.LatinHypercube(d=len(ranges), seed=np.random.default_rng(int(seed))).random(
+        int(samples))
+    points = []
+    for row in u:
+        pt = {}
+        for (name, (lo, hi)), uk in zip(ranges.items(), row):
+            if name == "n_rfe":     # integers lo..hi, each with equal probability
+                pt[name] = float(min(int(hi), int(math.floor(lo + uk * (int(hi) - lo + 1)))))
+            else:
+                pt[name] = float(lo + uk * (hi - lo))
+        points.append(pt)
+    return points
+
+
+def _list_points(points, problems):
+    if not isinstance(points, (list, tuple)) or not points:
+        problems.append(f"mode 'list' needs points = a non-empty list of tables, got {points!r}")
+        return []
+    out = []
+    for k, pt in enumerate(points):
+        if not isinstance(pt, dict):
+            problems.append(f"point {k}: expected a table name = value, got {pt!r}")
+            continue
+        clean = {}
+        for name, value in pt.items():
+            c = _check_name(name, f"point {k}", problems)
+            if c is None:
+                continue
+            try:
+                clean[c] = _number(value)
+            except (ValueError, TypeError):
+                problems.append(f"point {k}: {name} must be a number, got {value!r}")
+        out.append(clean)
+    return out
+
+
+def _swept(points):
+    names = []
+    for pt in points:
+        for name in pt:
+            if name not in names:
+                names.append(name)
+    return tuple(nm for nm in names
+                 if len({json.dumps(pt.get(nm)) for pt in points}) > 1 or nm != "n_rfe")
+
+
+def _limits(limits, problems):
+    if not isinstance(limits, dict):
+        problems.append(f"limits must be a table metric = largest value, got {limits!r}")
+        return {}
+    out = {}
+    for name, value in limits.items():
+        if name not in METRICS or not METRICS[name][2]:
+            valid = sorted(k for k, v in METRICS.items() if v[2])
+            problems.append(f"limits.{name}: not a metric that can be bounded; valid: {valid}")
+            continue
+        try:
+            out[name] = _number(value)
+        except (ValueError, TypeError):
+            problems.append(f"limits.{name}: expected a number, got {value!r}")
+            continue
+        if not (math.isfinite(out[name]) and out[name] >= 0):
+            problems.append(f"limits.{name} must be finite and >= 0 "
+                            f"({METRICS[name][0]}), got {value!r}")
+    return out
+
+
+def _plot_axes(plot, swept, problems):
+    if not isinstance(plot, dict) or set(plot) - {"x", "y"}:
+        problems.append(f"plot must be a table with keys x, y, got {plot!r}")
+        return None, None
+    axes = []
+    for key in ("x", "y"):
+        if key in plot:
+            c = _check_name(plot[key], f"plot.{key}", problems)
+            if c is not None and swept and c not in swept:
+                problems.append(f"plot.{key} = {plot[key]!r} is not swept; swept: {list(swept)}")
+            axes.append(c)
+        else:
+            axes.append(None)
+    free = [s for s in swept if s not in axes]
+    x, y = axes
+    if x is None and free:
+        x = free.pop(0)
+    if y is None and free:
+        y = free.pop(0)
+    if x is not None and x == y:
+        problems.append(f"plot.x and plot.y must differ, both are {x!r}")
+    return x, y
+
+
+def crane_changes(point):
+    """The CraneParameters fields of a point (n_rfe removed)."""
+    return {k: v for k, v in point.items() if k != "n_rfe"}
+
+
+def default_value(name):
+    """Value of a parameter in CraneParameters() (n_rfe: the run default)."""
+    if name == "n_rfe":
+        return RUN_DEFAULTS["n_rfe"]
+    return getattr(CraneParameters(), name)
