@@ -8,8 +8,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from .report import atomic_write_text, figure_data_uri, html_page, html_table, summarise, \
-    worst_first, write_csv  # noqa: E402
+from .report import (atomic_write_bytes, atomic_write_text, figure_data_uri,  # noqa: E402
+                     html_page, html_table, summarise, worst_first, write_csv)
 
 MAIN = ("z1", "psi2", "psi3", "z4")
 TINY = 1e-18   # floor for log plots of differences
@@ -82,8 +82,14 @@ def _energy_figure(title, g, mj):
     return uri
 
 
-def _img(uri):
-    return f"<p><img src='{uri}' alt='plot'></p>"
+def _img(uri, alt="plot"):
+    return f"<p><img src='{uri}' alt='{html.escape(alt)}'></p>"
+
+
+def _save_png(uri, path):
+    """Also keep a plot as a PNG beside the page (the verify index embeds these)."""
+    import base64
+    atomic_write_bytes(path, base64.b64decode(uri.split(",", 1)[1]))
 
 
 def write_report(out_dir, df, convergence, runs, plan):
@@ -111,12 +117,16 @@ def write_report(out_dir, df, convergence, runs, plan):
                          "milliseconds (a violent, impact-like start); with timeconst = 1/alpha "
                          "its reference acceleration equals Baumgarte's, but it lacks the Jdot "
                          "q_dot term, so its violation does not settle to zero.</p>")
-            parts.append(_img(_off_manifold_figure(model, g, mj)))
+            off = _off_manifold_figure(model, g, mj)
+            parts.append(_img(off, f"off-manifold start {model.name}"))
+            _save_png(off, out_dir / f"mujoco_off-manifold_{model.name}.png")
             continue
         title = f"{section}: {model.name}"
         parts.append(f"<h2>{html.escape(title)}</h2>")
-        parts.append(_img(_trajectory_figure(title, model, g, mj)))
-        parts.append(_img(_energy_figure(title, g, mj)))
+        traj = _trajectory_figure(title, model, g, mj)
+        parts.append(_img(traj, f"{title}: both trajectories and their difference"))
+        _save_png(traj, out_dir / f"mujoco_{section}_{model.name}.png")
+        parts.append(_img(_energy_figure(title, g, mj), f"{title}: energies"))
     parts.append("<h2>All rows, worst first</h2>")
     parts.append(html_table(worst_first(df), left_columns=("section", "case", "model",
                                                            "coordinate", "metric", "quantity",
