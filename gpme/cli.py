@@ -51,6 +51,11 @@ def _verify(args):
     return verify.main(args)
 
 
+def _sweep(args):
+    from gpme_study import command
+    return command.main(args)
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="gpme", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -78,6 +83,11 @@ def build_parser():
     ver.add_argument("--out", default="reports", help="reports root directory")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
+    from gpme_study.command import add_arguments as add_sweep_arguments
+    sw = sub.add_parser("sweep", help="parameter sweep of the crane on a Dask cluster: table, "
+                                      "heat maps, safe region (docs/sweep.md)")
+    add_sweep_arguments(sw)
+    sw.set_defaults(func=_sweep)
     return parser
 
 

@@ -19,8 +19,9 @@ METRICS = {
     "flex_rms_rad": ("rad", "RMS over t of the Euclidean norm of q_f", True),
     "dev_peak_m": ("m", "max over t of |dr|: flexible minus rigid end-effector position", True),
     "dev_rms_m": ("m", "RMS over t of |dr|", True),
-    "vib_peak_m": ("m", "max over t of |dr_hp|, dr high-passed at min_frequency_hz "
-                   "(the vibration, without the quasi-static sag)", True),
+    "vib_peak_m": ("m", "max of |dr_hp| over transient <= t <= t_end - 1/min_frequency_hz, "
+                   "dr high-passed at min_frequency_hz (the vibration without the "
+                   "quasi-static sag; the window leaves out the filter's end effects)", True),
     "vib_freq_hz": ("Hz", "frequency of the largest peak above min_frequency_hz of the summed "
                     "power spectra of q_f after the transient", False),
     "drive_psi3_peak_Nm": ("N m", "max over t of |F_r[psi3]| in the flexible run: peak torque "
@@ -77,12 +78,20 @@ def highpass(x, fs, cutoff):
     return signal.sosfiltfilt(sos, x, axis=0)
 
 
-def deviation_metrics(dr, fs, min_frequency_hz):
-    """{dev_peak_m, dev_rms_m, vib_peak_m} of dr (n_rows, 3) m sampled at fs Hz."""
+def deviation_metrics(dr, fs, min_frequency_hz, transient=0.0):
+    """{dev_peak_m, dev_rms_m, vib_peak_m} of dr (n_rows, 3) m sampled at fs Hz from t = 0.
+
+    vib_peak_m looks at t >= transient (s) and leaves out the last 1/min_frequency_hz s,
+    where the zero-phase filter's padding (an odd extension) turns the curvature of the slow
+    part into a spurious transient (a few % of the slow amplitude); if that leaves no
+    samples the whole record is used."""
     norm = np.linalg.norm(dr, axis=1)
     vib = np.linalg.norm(highpass(dr, fs, min_frequency_hz), axis=1)
+    t = np.arange(len(dr)) / fs
+    edge = 1.0 / min_frequency_hz if min_frequency_hz > 0 else 0.0
+    window = (t >= transient) & (t <= t[-1] - edge)
     return {"dev_peak_m": float(norm.max()), "dev_rms_m": float(np.sqrt(np.mean(norm ** 2))),
-            "vib_peak_m": float(vib.max())}
+            "vib_peak_m": float(vib[window].max() if window.any() else vib.max())}
 
 
 def dominant_frequency(x, fs, min_frequency_hz):

@@ -65,8 +65,7 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     if pending:
         n_workers_used = _compute(pending, spec.run, store, scheduler, n_workers, report)
     wall = time.perf_counter() - start
-    rows = [store.load(k) for k in keys]
-    table = pd.DataFrame([r for r in rows if r is not None])
+    table = assemble_table(spec, keys, store)
     table.attrs.update(points=len(spec.points), computed=len(pending), cached=n_cached,
                        wall_time_s=wall, workers=n_workers_used)
     write_table(table, out)
@@ -79,7 +78,7 @@ def _compute(pending, settings, store, scheduler, n_workers, report):
     client = _client(scheduler, n_workers)
     try:
         n_workers_used = len(client.scheduler_info().get("workers", {}))
-        report(f"dask: {client.dashboard_link or 'no dashboard'}, {n_workers_used} workers")
+        report(f"dask: {n_workers_used} workers at {client.scheduler.address}")
         futures = {client.submit(run_point, point, settings, key=f"gpme-point-{key}",
                                  pure=False): key for key, point in pending.items()}
         done = 0
@@ -101,6 +100,27 @@ def _compute(pending, settings, store, scheduler, n_workers, report):
         if cluster is not None:
             cluster.close()
     return n_workers_used
+
+
+def assemble_table(spec, keys, store):
+    """The table in spec order: key, status, error, failed_run, every parameter of the
+    spec (values from the spec: a stored row may come from an equal point written with
+    other names swept), the metrics, then the remaining columns."""
+    from .metrics import METRICS
+    params = []
+    for point in spec.points:
+        params += [nm for nm in point if nm not in params]
+    rows = []
+    for key, point in zip(keys, spec.points):
+        row = store.load(key)
+        if row is not None:
+            rows.append({**row, **point})
+    head = ["key", "status", "error", "failed_run"] + params + list(METRICS)
+    table = pd.DataFrame(rows)
+    for col in head:
+        if col not in table:
+            table[col] = pd.Series(dtype=float)
+    return table[head + [c for c in table.columns if c not in head]]
 
 
 def write_table(table, out_dir):

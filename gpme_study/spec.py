@@ -79,6 +79,12 @@ MAX_POINTS = 100_000
 class SweepSpecError(ModelError):
     """A sweep description is invalid; the message lists every problem found."""
 
+    def __init__(self, problems):
+        super().__init__(problems)
+        if len(self.problems) > 1:
+            self.args = (f"{len(self.problems)} problems in the sweep description:\n"
+                         + "\n".join(f"  - {p}" for p in self.problems),)
+
 
 @dataclass(frozen=True)
 class RunSettings:

@@ -1,0 +1,138 @@
+"""`gpme sweep`: its arguments and their translation into a sweep spec (the command line
+overrides what a --config file says), then the run, the table and the plots.
+
+Imports only argparse at module level, so building the `gpme` parser stays fast.
+"""
+import sys
+
+RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
+             "output_dt": "output_dt", "dt": "dt", "min_frequency": "min_frequency_hz",
+             "phi_tolerance": "phi_tolerance"}
+
+
+def add_arguments(parser):
+    """The `gpme sweep` options on an argparse (sub)parser."""
+    parser.add_argument("--config", metavar="FILE",
+                        help="TOML or YAML sweep file (docs/sweep.md); options below override it")
+    parser.add_argument("--mode", choices=("grid", "list", "lhs"), default=None,
+                        help="grid (default), list (with --point) or lhs (Latin hypercube)")
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
+                        help="grid: A=0.2,0.3,0.4 or A=0.2:0.6:5 (start:stop:num); "
+                             "lhs: A=0.2:0.6 (low:high); repeat per parameter")
+    parser.add_argument("--point", action="append", nargs="+", default=[],
+                        metavar="NAME=VALUE", help="one point of a list sweep, e.g. "
+                                                   "--point A=0.3 T=2; repeat per point")
+    parser.add_argument("--samples", type=int, default=None, help="lhs: number of points")
+    parser.add_argument("--seed", type=int, default=None, help="lhs: seed (default 0)")
+    parser.add_argument("--t-end", type=float, default=None, help="s, each run (default 6)")
+    parser.add_argument("--n-rfe", type=int, default=None,
+                        help="RFEM segments when n_rfe is not swept (default 1; 0 = rigid)")
+    parser.add_argument("--transient", type=float, default=None,
+                        help="s, start of the |Phi| and spectrum window (default 1)")
+    parser.add_argument("--output-dt", type=float, default=None,
+                        help="s, recorded row spacing (default 2e-3)")
+    parser.add_argument("--dt", type=float, default=None,
+                        help="s, RK4 step (default: per point from suggest_rk4_step)")
+    parser.add_argument("--min-frequency", type=float, default=None,
+                        help="Hz, lower edge of the vibration band (default 2)")
+    parser.add_argument("--phi-tolerance", type=float, default=None,
+                        help="largest |Phi| after the transient counted as met (default 1e-3)")
+    parser.add_argument("--limit", action="append", default=[], metavar="METRIC=MAX",
+                        help="safe-region bound, e.g. vib_peak_m=1e-4 drive_psi3_peak_Nm=6")
+    parser.add_argument("--plot-x", default=None, help="heat-map x parameter")
+    parser.add_argument("--plot-y", default=None, help="heat-map y parameter")
+    parser.add_argument("--out", default="reports/sweep",
+                        help="output directory; a rerun with the same --out resumes")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                             "(default: a local cluster)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local cluster worker processes (default: one per core)")
+    parser.add_argument("--retry-errors", action="store_true",
+                        help="recompute stored points whose status is 'error'")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    return parser
+
+
+def _pairs(items, flag, problems):
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            problems.append(f"{flag} {item!r}: expected NAME=VALUE")
+            continue
+        out[name.strip()] = value.strip()
+    return out
+
+
+def spec_dict(args, problems):
+    """The raw sweep dict of ``args``: the --config file's, overridden by the options;
+    problems with the options themselves are appended to ``problems``."""
+    from .spec import read_spec_file
+    data = read_spec_file(args.config) if args.config else {}
+    if args.mode:
+        data["mode"] = args.mode
+    elif args.point and "mode" not in data:
+        data["mode"] = "list"
+    if args.param:
+        data["parameters"] = {**(data.get("parameters") or {}),
+                              **_pairs(args.param, "--param", problems)}
+    if args.point:
+        data["points"] = [_pairs(p, "--point", problems) for p in args.point]
+    if args.samples is not None:
+        data["samples"] = args.samples
+    if args.seed is not None:
+        data["seed"] = args.seed
+    run = dict(data.get("run") or {})
+    for attr, key in RUN_FLAGS.items():
+        if getattr(args, attr) is not None:
+            run[key] = getattr(args, attr)
+    if run:
+        data["run"] = run
+    if args.limit:
+        data["limits"] = {**(data.get("limits") or {}), **_pairs(args.limit, "--limit", problems)}
+    plot = dict(data.get("plot") or {})
+    if args.plot_x:
+        plot["x"] = args.plot_x
+    if args.plot_y:
+        plot["y"] = args.plot_y
+    if plot:
+        data["plot"] = plot
+    if args.workers is not None and args.workers < 1:
+        problems.append(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler:
+        problems.append("--workers sizes the local cluster; it cannot be used with --scheduler")
+    return data
+
+
+def main(args):
+    """Run `gpme sweep`; exit status 0, 1 if a point failed unexpectedly (status 'error'),
+    2 for an invalid sweep description."""
+    from gpme_core.atomic import atomic_write_text
+
+    from .plots import write_plots
+    from .runner import run_sweep
+    from .spec import SweepSpecError, spec_from_dict
+    problems = []
+    try:
+        data = spec_dict(args, problems)
+        spec = spec_from_dict(data)
+    except SweepSpecError as exc:
+        problems += exc.problems
+    if problems:
+        print(f"error: {SweepSpecError(problems)}", file=sys.stderr)
+        return 2
+    import json
+    from pathlib import Path
+    out = Path(args.out)
+    atomic_write_text(out / "sweep_spec.json", json.dumps(data, indent=1, default=str))
+    report = None if args.quiet else (lambda line: print(line, flush=True))
+    table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
+                      retry_errors=args.retry_errors, report=report)
+    paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
+    counts = table["status"].value_counts().to_dict()
+    print(f"{len(table)} points: {counts}; computed {table.attrs['computed']} in "
+          f"{table.attrs['wall_time_s']:.1f} s; table {out / 'results.csv'} (+ .parquet)")
+    for p in paths.values():
+        print(f"wrote {p}")
+    return 1 if counts.get("error", 0) else 0

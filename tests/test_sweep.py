@@ -1,0 +1,267 @@
+"""gpme sweep (gpme_study): spec parsing and validation, metric helpers, one point with its
+failures recorded, the Dask runner with resume, the table against direct single runs, the
+plots and the command line.  Runs are short (t_end 1 s, n_rfe <= 1) to keep this file fast.
+"""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gpme.cli import main as gpme_main
+from gpme_core.crane import CraneParameters, crane_system, initial_state
+from gpme_core.integrate import simulate
+from gpme_study import metrics as mx
+from gpme_study.plots import safe_mask, write_plots
+from gpme_study.point import point_key, run_point
+from gpme_study.runner import run_sweep
+from gpme_study.spec import RunSettings, SweepSpecError, load_spec, spec_from_dict
+from gpme_study.store import ResultStore
+
+SHORT = {"t_end": 1.0, "transient": 0.3}
+# an ellipse with a 1.5 m semi-axis along x puts E out of the crane's reach at t = 0
+UNREACHABLE = {"a": 1.5}
+
+
+# ------------------------------------------------------------------ spec
+def test_grid_is_the_cartesian_product_with_defaults_for_n_rfe():
+    spec = spec_from_dict({"parameters": {"A": [0.2, 0.3], "T": "1:3:3"}, "run": SHORT})
+    assert len(spec.points) == 6
+    assert spec.points[0] == {"amplitude": 0.2, "period": 1.0, "n_rfe": 1}
+    assert {p["period"] for p in spec.points} == {1.0, 2.0, 3.0}
+    assert spec.swept == ("amplitude", "period")
+    assert (spec.plot_x, spec.plot_y) == ("amplitude", "period")
+
+
+def test_lhs_puts_one_sample_in_each_stratum_and_is_reproducible():
+    data = {"mode": "lhs", "samples": 8, "seed": 3,
+            "parameters": {"A": [0.1, 0.5], "T": "1:3", "n_rfe": [0, 1]}}
+    spec = spec_from_dict(data)
+    a = np.array([p["amplitude"] for p in spec.points])
+    strata = np.floor((a - 0.1) / 0.4 * 8).astype(int)
+    assert sorted(strata) == list(range(8))
+    assert {p["n_rfe"] for p in spec.points} == {0, 1}
+    assert spec_from_dict(data).points == spec.points
+
+
+def test_toml_and_yaml_files_give_the_same_spec(tmp_path):
+    toml = tmp_path / "s.toml"
+    toml.write_text('mode = "list"\npoints = [{A = 0.3, T = 2.0}, {A = 0.4, n_rfe = 0}]\n'
+                    '[run]\nt_end = 2.0\n[limits]\nvib_peak_m = 1e-4\n')
+    yaml = tmp_path / "s.yaml"
+    yaml.write_text("mode: list\npoints:\n  - {A: 0.3, T: 2.0}\n  - {A: 0.4, n_rfe: 0}\n"
+                    "run: {t_end: 2.0}\nlimits: {vib_peak_m: 1.0e-4}\n")
+    a, b = load_spec(toml), load_spec(yaml)
+    assert a == b
+    assert a.points[1] == {"amplitude": 0.4, "n_rfe": 0}
+    assert a.limits == {"vib_peak_m": 1e-4}
+
+
+def test_invalid_spec_lists_every_problem():
+    with pytest.raises(SweepSpecError) as info:
+        spec_from_dict({"mode": "grid", "parameters": {"A": [0.2], "Q": [1], "T": [-1.0]},
+                        "run": {"t_end": 0.5, "transient": 2.0}, "limits": {"nope": 1},
+                        "extra": 1})
+    msg = str(info.value)
+    for part in ("unknown parameter 'Q'", "period must be finite and > 0 s, got -1.0",
+                 "run.transient (2 s) must be shorter than run.t_end", "limits.nope",
+                 "unknown key 'extra'"):
+        assert part in msg
+    assert "5 problems" in msg
+
+
+def test_spec_file_that_does_not_parse_names_the_file(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("mode = \n")
+    with pytest.raises(SweepSpecError, match="bad.toml.*cannot be parsed"):
+        load_spec(bad)
+
+
+# ------------------------------------------------------------------ metrics
+def test_dominant_frequency_finds_a_sine_between_bins():
+    fs, f0 = 500.0, 7.3
+    t = np.arange(0, 4.0, 1 / fs)
+    x = np.column_stack([np.sin(2 * np.pi * f0 * t) + 0.5 * t,     # trend is removed
+                         0.1 * np.sin(2 * np.pi * 1.0 * t)])       # below the 2 Hz band
+    # tolerance: the Hann-window parabola interpolation is good to ~0.1 bin (bin 0.25 Hz)
+    assert mx.dominant_frequency(x, fs, 2.0) == pytest.approx(f0, abs=0.03)
+
+
+def test_highpass_keeps_vibration_and_removes_the_slow_part():
+    fs = 500.0
+    t = np.arange(0, 4.0, 1 / fs)[:, None]
+    slow, fast = 0.01 * np.cos(2 * np.pi * 0.4 * t), 1e-4 * np.sin(2 * np.pi * 15 * t)
+    dev = mx.deviation_metrics(np.hstack([slow + fast, 0 * t, 0 * t]), fs, 2.0, 1.0)
+    # tolerance: 4th-order filtfilt at 2 Hz passes 15 Hz within 0.01 % and leaves
+    # 0.01 * (0.4/2)^8 ~ 3e-8 m of the 0.4 Hz part; the edge transients of the slow part
+    # (5.6e-5 m at t = 0) measured below 6e-7 m inside the window [1 s, 3.5 s]: 1 %
+    assert dev["vib_peak_m"] == pytest.approx(1e-4, rel=0.01)
+    whole = mx.deviation_metrics(np.hstack([slow + fast, 0 * t, 0 * t]), fs, 2.0, 0.0)
+    assert whole["vib_peak_m"] > 2e-4     # without the window the edge effect shows
+    assert dev["dev_peak_m"] == pytest.approx(0.01 + 1e-4, rel=1e-3)
+
+
+# ------------------------------------------------------------------ one point
+def test_unreachable_point_is_a_recorded_outcome():
+    spec = spec_from_dict({"mode": "list", "points": [UNREACHABLE], "run": SHORT})
+    row = run_point(spec.points[0], spec.run)
+    assert row["status"] == "infeasible"
+    assert row["failed_run"] == "rigid"
+    assert "ConstraintError" in row["error"] and "out of reach" in row["error"]
+    assert row["constraints_met"] is False
+    assert np.isnan(row["dev_peak_m"]) and row["wall_time_s"] > 0
+
+
+def test_rigid_point_has_no_flexibility_metrics_but_drive_peaks():
+    row = run_point({"amplitude": 0.3, "n_rfe": 0}, RunSettings(**{**SHORT, "n_rfe": 0}))
+    assert row["status"] == "ok" and row["constraints_met"]
+    assert np.isnan(row["vib_peak_m"]) and np.isnan(row["flex_peak_rad"])
+    assert row["drive_psi3_peak_Nm"] == row["rigid_drive_psi3_peak_Nm"] > 0
+
+
+def test_point_key_depends_on_parameters_and_settings_only():
+    s = RunSettings(**SHORT)
+    assert point_key({"amplitude": 0.5, "n_rfe": 1}, s) == point_key({"n_rfe": 1}, s)  # default
+    assert point_key({"amplitude": 0.3, "n_rfe": 1}, s) != point_key({"n_rfe": 1}, s)
+    assert point_key({"n_rfe": 1}, s) != point_key({"n_rfe": 1}, RunSettings(t_end=2.0))
+
+
+# ------------------------------------------------------------------ runner on Dask
+@pytest.fixture(scope="module")
+def cluster():
+    from dask.distributed import LocalCluster
+    import logging
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=logging.ERROR) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def tiny_sweep(cluster, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    spec = spec_from_dict({"mode": "list", "run": SHORT,
+                           "points": [{"A": 0.3, "T": 1.5}, {"A": 0.5, "T": 2.5},
+                                      UNREACHABLE]})
+    table = run_sweep(spec, out, scheduler=cluster.scheduler_address, report=None)
+    return spec, out, table
+
+
+def _direct(point, settings):
+    """The metrics recomputed from direct gpme_core runs, independently of gpme_study."""
+    params = CraneParameters().with_changes(**{k: v for k, v in point.items() if k != "n_rfe"})
+    runs = {}
+    for n, dt in ((0, 1e-3), (1, 4e-4)):     # the steps the sweep chose (checked below)
+        system = crane_system(n, params)
+        q0, qd0 = initial_state(system.model, params)
+        df = simulate(system, settings.t_end, q0, qd0, dt=dt, on_manifold=True,
+                      output_dt=settings.output_dt)
+        names = list(system.model.coordinate_names)
+        f_r = np.array([system.solve(t, q, qd).reaction_forces for t, q, qd in zip(
+            df.t, df[names].to_numpy(), df[[f"{c}_dot" for c in names]].to_numpy())])
+        runs[n] = (df, f_r, names)
+    flex, f_r, names = runs[1]
+    rigid = runs[0][0]
+    dr = flex[["x_E", "y_E", "z_E"]].to_numpy() - rigid[["x_E", "y_E", "z_E"]].to_numpy()
+    late = flex[flex.t >= settings.transient]
+    return {"dev_peak_m": np.linalg.norm(dr, axis=1).max(),
+            "flex_peak_rad": flex[["psi_arm_1", "theta_arm_1", "phi_arm_1"]].abs().max().max(),
+            "drive_psi3_peak_Nm": np.abs(f_r[:, names.index("psi3")]).max(),
+            "drive_z4_peak_N": np.abs(f_r[:, names.index("z4")]).max(),
+            "phi2_max_abs_m": late.Phi_2.abs().max()}
+
+
+def test_table_matches_direct_single_runs(tiny_sweep):
+    spec, out, table = tiny_sweep
+    assert list(table.status) == ["ok", "ok", "infeasible"]
+    assert table.constraints_met.tolist() == [True, True, False]
+    ok = table.iloc[0]
+    assert (ok.rigid_dt_s, ok.flexible_dt_s) == pytest.approx((1e-3, 4e-4), rel=1e-12)
+    direct = _direct(spec.points[0], spec.run)
+    for name, value in direct.items():
+        # tolerance: identical computations in another process; 1e-9 relative allows
+        # only for a different BLAS summation order, and 1e-15 absolute for Phi ~ 1e-13
+        assert ok[name] == pytest.approx(value, rel=1e-9, abs=1e-15), name
+    assert 0 < ok.vib_peak_m <= ok.dev_peak_m
+    assert ok.vib_freq_hz > spec.run.min_frequency_hz
+
+
+def test_table_files_and_point_store(tiny_sweep):
+    spec, out, table = tiny_sweep
+    csv = pd.read_csv(out / "results.csv")
+    parquet = pd.read_parquet(out / "results.parquet")
+    assert len(csv) == len(parquet) == 3
+    assert list(parquet.columns) == list(table.columns)
+    # tolerance: CSV prints floats with 17 significant digits: exact round trip
+    np.testing.assert_allclose(csv.dev_peak_m, table.dev_peak_m, rtol=0, atol=0)
+    stored = ResultStore(out).keys()
+    assert stored == set(table.key)
+    assert json.loads((out / "points" / f"{table.key[2]}.json").read_text())["status"] == \
+        "infeasible"
+
+
+def test_resume_recomputes_only_missing_points(tiny_sweep, cluster):
+    spec, out, table = tiny_sweep
+    again = run_sweep(spec, out, scheduler=cluster.scheduler_address, report=None)
+    assert again.attrs["computed"] == 0 and again.attrs["cached"] == 3
+    pd.testing.assert_frame_equal(again, table)
+    (out / "points" / f"{table.key[2]}.json").unlink()
+    third = run_sweep(spec, out, scheduler=cluster.scheduler_address, report=None)
+    assert third.attrs["computed"] == 1
+    assert third.status.tolist() == table.status.tolist()
+
+
+# ------------------------------------------------------------------ plots
+def _synthetic_table():
+    rows = []
+    for a in (0.1, 0.2, 0.3):
+        for t in (1.0, 2.0):
+            rows.append({"amplitude": a, "period": t, "status": "ok", "constraints_met": True,
+                         "vib_peak_m": a / t, "drive_psi3_peak_Nm": 10 * a})
+    rows[-1].update(status="infeasible", constraints_met=False, vib_peak_m=np.nan,
+                    drive_psi3_peak_Nm=np.nan)
+    return pd.DataFrame(rows)
+
+
+def test_safe_mask_applies_every_limit_and_excludes_infeasible():
+    table = _synthetic_table()
+    safe = safe_mask(table, {"vib_peak_m": 0.12, "drive_psi3_peak_Nm": 2.5})
+    expected = [(r.vib_peak_m <= 0.12) and (r.drive_psi3_peak_Nm <= 2.5)
+                and r.status == "ok" for r in table.itertuples()]
+    assert safe.tolist() == expected == [True, True, False, True, False, False]
+
+
+def test_plots_mark_the_infeasible_cell(tmp_path):
+    from gpme_study.plots import heat_map
+    table = _synthetic_table()
+    fig = heat_map(table, "amplitude", "period", "vib_peak_m", {"vib_peak_m": 0.12})
+    hatched = [p for p in fig.axes[0].patches if p.get_hatch() == "xx"]
+    assert len(hatched) == 1 and hatched[0].get_x() == pytest.approx(0.25)
+    paths = write_plots(table, tmp_path, "amplitude", "period", {"vib_peak_m": 0.12},
+                        metrics=("vib_peak_m", "drive_psi3_peak_Nm"))
+    assert sorted(paths) == ["heatmap_drive_psi3_peak_Nm.png", "heatmap_vib_peak_m.png",
+                             "safe_region.png"]
+    assert all(p.stat().st_size > 1000 for p in paths.values())
+
+
+# ------------------------------------------------------------------ command line
+def test_cli_sweep_on_the_default_local_cluster(tmp_path, capsys):
+    out = tmp_path / "cli"
+    code = gpme_main(["sweep", "--param", "A=0.3,0.4", "--param", "T=2", "--n-rfe", "0",
+                      "--t-end", "1", "--transient", "0.3", "--workers", "1", "--out",
+                      str(out), "--limit", "drive_psi3_peak_Nm=100", "--quiet"])
+    assert code == 0
+    table = pd.read_csv(out / "results.csv")
+    assert table.amplitude.tolist() == [0.3, 0.4] and (table.status == "ok").all()
+    assert (out / "plots" / "safe_region.png").is_file()
+    assert "2 points: {'ok': 2}" in capsys.readouterr().out
+
+
+def test_cli_invalid_sweep_exits_2_with_every_problem(tmp_path, capsys):
+    code = gpme_main(["sweep", "--param", "A", "--limit", "x=1", "--t-end", "-1",
+                      "--out", str(tmp_path)])
+    assert code == 2
+    err = capsys.readouterr().err
+    for part in ("problems in the sweep description", "--param 'A': expected NAME=VALUE",
+                 "limits.x: not a metric", "run.t_end must be > 0",
+                 "mode 'grid' needs at least one parameter"):
+        assert part in err
