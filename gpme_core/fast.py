@@ -27,30 +27,20 @@ else:  # pragma: no cover
 
 
 @_jit
-def _mm(a, b):
-    """Small dense matrix product by loops (BLAS call overhead dominates at 4x4)."""
-    n, k = a.shape
-    m = b.shape[1]
-    out = np.zeros((n, m))
-    for i in range(n):
-        for p in range(k):
-            aip = a[i, p]
-            if aip != 0.0:
-                for j in range(m):
-                    out[i, j] += aip * b[p, j]
-    return out
+def _mm4(a, b, out):
+    """out = a @ b for 4x4 arrays, no allocation."""
+    for i in range(4):
+        for j in range(4):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
 
 
 @_jit
-def _mv(a, x):
-    n, k = a.shape
-    out = np.zeros(n)
-    for i in range(n):
-        acc = 0.0
-        for p in range(k):
-            acc += a[i, p] * x[p]
-        out[i] = acc
-    return out
+def _mm4_acc(a, b, scale, out):
+    """out += scale * (a @ b) for 4x4 arrays."""
+    for i in range(4):
+        for j in range(4):
+            out[i, j] += scale * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+                                  + a[i, 3] * b[3, j])
 
 
 @_jit
@@ -60,42 +50,42 @@ def chain(origins, generators, is_revolute, q):
     t_all = np.empty((n, 4, 4))
     s_all = np.zeros((n, 4, 4))
     acc = np.eye(4)
-    motion = np.eye(4)
+    motion = np.empty((4, 4))
+    local = np.empty((4, 4))
     for k in range(n):
-        motion[:, :] = 0.0
-        for i in range(4):
-            motion[i, i] = 1.0
         g = generators[k]
+        for i in range(4):
+            for j in range(4):
+                motion[i, j] = 1.0 if i == j else 0.0
         if is_revolute[k]:
+            # Rodrigues: R = I + sin K + (1 - cos) K^2, K = skew(axis)
             s, c = np.sin(q[k]), np.cos(q[k])
-            kk = _mm(g[:3, :3], g[:3, :3])
             for i in range(3):
                 for j in range(3):
-                    motion[i, j] += s * g[i, j] + (1.0 - c) * kk[i, j]
+                    kk = g[i, 0] * g[0, j] + g[i, 1] * g[1, j] + g[i, 2] * g[2, j]
+                    motion[i, j] += s * g[i, j] + (1.0 - c) * kk
         else:
             for i in range(3):
                 motion[i, 3] = g[i, 3] * q[k]
-        acc = _mm(acc, _mm(origins[k], motion))
-        t_all[k] = acc
-        r = acc[:3, :3]
-        p = acc[:3, 3]
+        _mm4(origins[k], motion, local)
+        _mm4(acc, local, t_all[k])
+        acc = t_all[k]
         if is_revolute[k]:
-            # S = [[R K R^T, -R K R^T p], [0, 0]]
-            w = _mm(_mm(r, g[:3, :3]), r.T)
-            s_all[k, :3, :3] = w
-            s_all[k, :3, 3] = -_mv(w, p)
+            # S = [[W, -W p], [0, 0]],  W = R K R^T
+            for i in range(3):
+                for j in range(3):
+                    w = 0.0
+                    for a in range(3):
+                        for b in range(3):
+                            w += acc[i, a] * g[a, b] * acc[j, b]
+                    s_all[k, i, j] = w
+            for i in range(3):
+                s_all[k, i, 3] = -(s_all[k, i, 0] * acc[0, 3] + s_all[k, i, 1] * acc[1, 3]
+                                   + s_all[k, i, 2] * acc[2, 3])
         else:
-            s_all[k, :3, 3] = _mv(r, g[:3, 3])
+            for i in range(3):
+                s_all[k, i, 3] = acc[i, 0] * g[0, 3] + acc[i, 1] * g[1, 3] + acc[i, 2] * g[2, 3]
     return t_all, s_all
-
-
-@_jit
-def _inner(a, b):
-    acc = 0.0
-    for i in range(4):
-        for j in range(4):
-            acc += a[i, j] * b[i, j]
-    return acc
 
 
 @_jit
@@ -104,36 +94,65 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
     n = q_dot.shape[0]
     hw = np.empty((n, 4, 4))
     first = np.empty((n, 4))
+    th = np.empty((4, 4))
     for l in range(n):
-        th = _mm(t_all[l], pseudo_inertias[l])
-        hw[l] = _mm(th, t_all[l].T)
-        first[l] = th[:, 3]
-    # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l))
+        _mm4(t_all[l], pseudo_inertias[l], th)
+        tl = t_all[l]
+        for i in range(4):
+            for j in range(4):
+                hw[l, i, j] = th[i, 0] * tl[j, 0] + th[i, 1] * tl[j, 1] + th[i, 2] * tl[j, 2] \
+                    + th[i, 3] * tl[j, 3]
+            first[l, i] = th[i, 3]
+    # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
+    # B_l = B_{l-1} + (2 V_{l-1} + S_l qd_l) S_l qd_l
     b_all = np.empty((n, 4, 4))
     v_prev = np.zeros((4, 4))
     b_prev = np.zeros((4, 4))
+    tmp = np.empty((4, 4))
     for l in range(n):
-        w = s_all[l] * q_dot[l]
-        b_prev = b_prev + _mm(2.0 * v_prev + w, w)
+        w = q_dot[l]
+        for i in range(4):
+            for j in range(4):
+                tmp[i, j] = 2.0 * v_prev[i, j] + s_all[l, i, j] * w
+        _mm4_acc(tmp, s_all[l], w, b_prev)
         b_all[l] = b_prev
-        v_prev = v_prev + w
+        for i in range(4):
+            for j in range(4):
+                v_prev[i, j] += s_all[l, i, j] * w
     m = np.empty((n, n))
     h = np.empty(n)
     g = np.empty(n)
     hc = np.zeros((4, 4))
     gacc = np.zeros((4, 4))
     wacc = np.zeros(4)
+    y = np.empty((4, 4))
     for j in range(n - 1, -1, -1):
-        hc = hc + hw[j]
-        gacc = gacc + _mm(b_all[j], hw[j])
-        wacc = wacc + first[j]
-        y = _mm(s_all[j], hc)
+        for a in range(4):
+            for c in range(4):
+                hc[a, c] += hw[j, a, c]
+            wacc[a] += first[j, a]
+        _mm4_acc(b_all[j], hw[j], 1.0, gacc)
+        _mm4(s_all[j], hc, y)
+        # S has a zero last row: the traces run over the first three rows only
         for i in range(j + 1):
-            m[i, j] = _inner(s_all[i], y)
-            m[j, i] = m[i, j]
-        h[j] = -_inner(s_all[j], gacc)
-        sw = _mv(s_all[j], wacc)
-        g[j] = -(gamma[0] * sw[0] + gamma[1] * sw[1] + gamma[2] * sw[2])
+            acc = 0.0
+            for a in range(3):
+                for c in range(4):
+                    acc += s_all[i, a, c] * y[a, c]
+            m[i, j] = acc
+            m[j, i] = acc
+        acc = 0.0
+        for a in range(3):
+            for c in range(4):
+                acc += s_all[j, a, c] * gacc[a, c]
+        h[j] = -acc
+        gj = 0.0
+        for a in range(3):
+            sw = 0.0
+            for c in range(4):
+                sw += s_all[j, a, c] * wacc[c]
+            gj += gamma[a] * sw
+        g[j] = -gj
     return m, h, g
 
 
@@ -144,18 +163,37 @@ def point(t_all, s_all, q_dot, link, r_local):
     r = np.empty(4)
     r[:3] = r_local
     r[3] = 1.0
-    rw = _mv(t_all[link], r)
+    rw = np.zeros(4)
+    for i in range(4):
+        for c in range(4):
+            rw[i] += t_all[link, i, c] * r[c]
     jac = np.zeros((3, n))
+    # p_dot = sum S_i qd_i r_w;  drift = B r_w with B from the recursion, applied to r_w
+    # directly: B r_w = sum_l (2 V_{l-1} + S_l qd_l) S_l qd_l r_w
+    vel = np.zeros(3)
+    drift = np.zeros(3)
     v_prev = np.zeros((4, 4))
-    b = np.zeros((4, 4))
-    for i in range(link + 1):
-        col = _mv(s_all[i], rw)
-        jac[:, i] = col[:3]
-        w = s_all[i] * q_dot[i]
-        b = b + _mm(2.0 * v_prev + w, w)
-        v_prev = v_prev + w
-    drift = _mv(b, rw)[:3]
-    return rw[:3].copy(), _mv(jac, q_dot), jac, drift
+    col = np.empty(4)
+    for l in range(link + 1):
+        for a in range(4):
+            acc = 0.0
+            for c in range(4):
+                acc += s_all[l, a, c] * rw[c]
+            col[a] = acc
+        for a in range(3):
+            jac[a, l] = col[a]
+        w = q_dot[l]
+        if w != 0.0:
+            for a in range(3):
+                acc = 0.0
+                for c in range(4):
+                    acc += (2.0 * v_prev[a, c] + s_all[l, a, c] * w) * col[c]
+                drift[a] += acc * w
+                vel[a] += col[a] * w
+            for a in range(4):
+                for c in range(4):
+                    v_prev[a, c] += s_all[l, a, c] * w
+    return rw[:3].copy(), vel, jac, drift
 
 
 @_jit
@@ -164,3 +202,86 @@ def chain_and_terms(origins, generators, is_revolute, pseudo_inertias, gamma, q,
     t_all, s_all = chain(origins, generators, is_revolute, q)
     m, h, g = terms(t_all, s_all, pseudo_inertias, gamma, q_dot)
     return t_all, s_all, m, h, g
+
+
+@_jit
+def reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
+    """Reduced GPME solve (see gpme_core.gpme.ProgrammedMotion.solve for the formulas).
+
+    m (n, n), rhs (n,) = h + Q, a (k, n) constraint Jacobian, constraint_rhs (k,) =
+    -kappa - 2 alpha Phi_dot - beta^2 Phi, ic (n-k,), dc (k,) index arrays.
+    Returns (q_ddot (n,), multipliers (k,), rcond of A_dc (1-norm), ok flag); ok is False
+    when A_dc or the reduced matrix is singular (the caller raises the error).
+    """
+    n = m.shape[0]
+    k = dc.shape[0]
+    a_dc = np.empty((k, k))
+    for i in range(k):
+        for j in range(k):
+            a_dc[i, j] = a[i, dc[j]]
+    norm = 0.0
+    for j in range(k):
+        col = 0.0
+        for i in range(k):
+            col += abs(a_dc[i, j])
+        norm = max(norm, col)
+    det_ok = True
+    inv = np.empty((k, k))
+    try:
+        inv = np.linalg.inv(a_dc)
+    except Exception:  # singular
+        det_ok = False
+    if not det_ok:
+        return np.zeros(n), np.zeros(k), 0.0, False
+    inv_norm = 0.0
+    for j in range(k):
+        col = 0.0
+        for i in range(k):
+            col += abs(inv[i, j])
+        inv_norm = max(inv_norm, col)
+    rcond = 0.0
+    if norm > 0.0 and inv_norm > 0.0 and np.isfinite(inv_norm):
+        rcond = 1.0 / (norm * inv_norm)
+    ni = ic.shape[0]
+    # Gamma = -A_dc^-1 A_ic  (k, ni)
+    gamma = np.zeros((k, ni))
+    for i in range(k):
+        for j in range(ni):
+            acc = 0.0
+            for p in range(k):
+                acc += inv[i, p] * a[p, ic[j]]
+            gamma[i, j] = -acc
+    lhs = np.empty((n, n))
+    b = np.empty(n)
+    for r in range(ni):
+        row = ic[r]
+        for c in range(n):
+            acc = m[row, c]
+            for p in range(k):
+                acc += gamma[p, r] * m[dc[p], c]
+            lhs[r, c] = acc
+        acc = rhs[row]
+        for p in range(k):
+            acc += gamma[p, r] * rhs[dc[p]]
+        b[r] = acc
+    for r in range(k):
+        for c in range(n):
+            lhs[ni + r, c] = a[r, c]
+        b[ni + r] = constraint_rhs[r]
+    ok = True
+    q_ddot = np.zeros(n)
+    try:
+        q_ddot = np.linalg.solve(lhs, b)
+    except Exception:
+        ok = False
+    # reactions F = M q_ddot - rhs = A^T lambda; lambda = A_dc^-T F[dc]
+    lam = np.zeros(k)
+    for i in range(k):
+        acc = 0.0
+        for p in range(k):
+            f = -rhs[dc[p]]
+            for c in range(n):
+                f += m[dc[p], c] * q_ddot[c]
+            acc += inv[p, i] * f
+        lam[i] = acc
+    return q_ddot, lam, rcond, ok

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from . import fast
 from .constraints import bind_constraints, evaluate_constraints
 from .dynamics import dynamics_terms
 from .errors import ConstraintError, ModelError
@@ -171,6 +172,16 @@ class ProgrammedMotion:
             z = np.zeros(0)
             return GpmeSolution(t, q_ddot, z, z, np.zeros((0, n)), z, z, np.zeros(n), terms)
         phi, phi_dot, a, kappa = self.constraints(t, q, q_dot, terms.kin)
+        constraint_rhs = -kappa - 2.0 * self.alpha * phi_dot - self.beta ** 2 * phi
+        if fast.ENABLED:
+            q_ddot, lam, rcond, ok = fast.reduced_solve(terms.M, rhs, a, constraint_rhs,
+                                                        self.ic, self.dc)
+            if not rcond > SINGULAR_RCOND:
+                self.velocity_map(a, t, q)      # raises the ConstraintError with details
+            if not ok:
+                raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular "
+                                      f"at q = {np.round(q, 6).tolist()}")
+            return GpmeSolution(t, q_ddot, phi, phi_dot, a, kappa, lam, a.T @ lam, terms)
         gamma, inv_dc = self.velocity_map(a, t, q)
         # N^T X for X with rows ordered as q: X[ic] + Gamma^T X[dc]
         proj_m = terms.M[self.ic] + gamma.T @ terms.M[self.dc]
@@ -180,7 +191,7 @@ class ProgrammedMotion:
         lhs[n - m:] = a
         b = np.empty(n)
         b[:n - m] = proj_rhs
-        b[n - m:] = -kappa - 2.0 * self.alpha * phi_dot - self.beta ** 2 * phi
+        b[n - m:] = constraint_rhs
         try:
             q_ddot = np.linalg.solve(lhs, b)
         except np.linalg.LinAlgError:

@@ -1,0 +1,1 @@
+"""Benchmarks of gpme against Pinocchio and MuJoCo (run: python -m benchmarks.bench)."""
