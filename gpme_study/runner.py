@@ -28,7 +28,7 @@ def _client(scheduler, n_workers):
     if scheduler:
         return Client(scheduler)
     cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, dashboard_address=None,
+                           processes=True, dashboard_address=":0",
                            silence_logs=logging.ERROR)
     client = Client(cluster)
     client._gpme_own_cluster = cluster     # closed with the client in run_sweep

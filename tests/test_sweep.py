@@ -94,10 +94,10 @@ def test_highpass_keeps_vibration_and_removes_the_slow_part():
     dev = mx.deviation_metrics(np.hstack([slow + fast, 0 * t, 0 * t]), fs, 2.0, 1.0)
     # tolerance: 4th-order filtfilt at 2 Hz passes 15 Hz within 0.01 % and leaves
     # 0.01 * (0.4/2)^8 ~ 3e-8 m of the 0.4 Hz part; the edge transients of the slow part
-    # (5.6e-5 m at t = 0) measured below 6e-7 m inside the window [1 s, 3.5 s]: 1 %
+    # (5.6e-5 m at t = 0) measured below 1e-6 m inside the window [1 s, 3 s]: 1 %
     assert dev["vib_peak_m"] == pytest.approx(1e-4, rel=0.01)
     whole = mx.deviation_metrics(np.hstack([slow + fast, 0 * t, 0 * t]), fs, 2.0, 0.0)
-    assert whole["vib_peak_m"] > 2e-4     # without the window the edge effect shows
+    assert whole["vib_peak_m"] > 1.3e-4   # without the window the edge effect shows
     assert dev["dev_peak_m"] == pytest.approx(0.01 + 1e-4, rel=1e-3)
 
 
@@ -132,7 +132,7 @@ def cluster():
     from dask.distributed import LocalCluster
     import logging
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as c:
+                      dashboard_address=":0", silence_logs=logging.ERROR) as c:
         yield c
 
 
