@@ -19,6 +19,7 @@ from crosscheck.mjcf import mjcf_text
 from crosscheck.mujoco_sim import simulate_mujoco, set_state, chain_map
 from crosscheck.pinocchio_model import from_gpme
 from gpme_core.errors import SimulationError
+from gpme_core.integrate import rk4_step_plan
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -59,11 +60,14 @@ class PinocchioConstrained:
         return pin.forwardDynamics(pm, data, q, qd, tau, a, gamma)
 
 
-def rk4_run(accelerations, t_end, q0, qd0, dt):
-    """Classical RK4 of q_ddot = accelerations(t, q, q_dot); returns (q, q_dot, wall s)."""
-    n_steps = int(np.ceil(t_end / dt - 1e-9))
-    h = t_end / n_steps
+def rk4_run(accelerations, t_end, q0, qd0, dt, output_dt=1e-2):
+    """Classical RK4 of q_ddot = accelerations(t, q, q_dot).
+
+    Returns (times (k,), q history (k, n), wall time s) recorded every output_dt."""
+    h, every = rk4_step_plan(t_end, dt, output_dt)
+    n_steps = int(round(t_end / h))
     q, qd = np.array(q0, float), np.array(qd0, float)
+    times, history = [0.0], [q.copy()]
     start = time.perf_counter()
     for k in range(n_steps):
         t = k * h
@@ -78,7 +82,10 @@ def rk4_run(accelerations, t_end, q0, qd0, dt):
         qd = qd + h / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
         if not np.all(np.isfinite(qd)):
             raise SimulationError(f"RK4 run diverged at t = {t + h:.6g} s (dt = {h:g} s)")
-    return q, qd, time.perf_counter() - start
+        if (k + 1) % every == 0:
+            times.append((k + 1) * h)
+            history.append(q.copy())
+    return np.array(times), np.array(history), time.perf_counter() - start
 
 
 def mujoco_programmed(system, dt, timeconst=None):

@@ -99,6 +99,18 @@ def _check_state(model, t, y, n, dt=None):
             "be met)")
 
 
+def rk4_step_plan(t_end, dt, output_dt):
+    """(step, steps per record): equal steps no longer than dt that land on every
+    output time when t_end is a whole number of output_dt, else on t_end only."""
+    outputs = t_end / output_dt
+    if output_dt >= dt and abs(outputs - round(outputs)) < 1e-9 * max(outputs, 1.0):
+        per_output = int(np.ceil(output_dt / dt - 1e-9))
+        return output_dt / per_output, per_output
+    n_steps = int(np.ceil(t_end / dt - 1e-9))
+    step = t_end / n_steps
+    return step, max(1, int(round(output_dt / step)))
+
+
 def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress):
     n_steps = int(round(t_end / dt))
     ts, ys = [0.0], [y0.copy()]
@@ -191,10 +203,7 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
     start = time.perf_counter()
     nfev = None
     if method == "RK4":
-        # a whole number of equal steps no longer than the requested dt
-        n_steps = int(np.ceil(t_end / dt - 1e-9))
-        dt = t_end / n_steps
-        record_every = max(1, int(round(output_dt / dt)))
+        dt, record_every = rk4_step_plan(t_end, dt, output_dt)
         ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress)
         nfev = 4 * int(round(t_end / dt))
     else:
