@@ -22,6 +22,9 @@ METRICS = {
     "vib_peak_m": ("m", "max of |dr_hp| over transient <= t <= t_end - 2/min_frequency_hz, "
                    "dr high-passed at min_frequency_hz (the vibration without the "
                    "quasi-static sag; the window leaves out the filter's end effects)", True),
+    "psi3_dev_peak_rad": ("rad", "max over t of |psi3 flexible - psi3 rigid|: how differently "
+                          "the psi3 drive must move to make the flexible arm follow", True),
+    "z4_dev_peak_m": ("m", "max over t of |z4 flexible - z4 rigid|, the same for z4", True),
     "vib_freq_hz": ("Hz", "frequency of the largest peak above min_frequency_hz of the summed "
                     "power spectra of q_f after the transient", False),
     "drive_psi3_peak_Nm": ("N m", "max over t of |F_r[psi3]| in the flexible run: peak torque "
@@ -73,6 +76,13 @@ def end_effector_deviation(flexible, rigid):
         r_r = np.column_stack([np.interp(t, rigid.t.to_numpy(), rigid[c].to_numpy())
                                for c in ("x_E", "y_E", "z_E")])
     return r_f - r_r
+
+
+def dependent_deviation(flexible, rigid):
+    """{psi3_dev_peak_rad, z4_dev_peak_m}: peak difference of the dependent coordinates of
+    two runs recorded at the same times."""
+    return {"psi3_dev_peak_rad": float(np.abs(flexible.psi3 - rigid.psi3).max()),
+            "z4_dev_peak_m": float(np.abs(flexible.z4 - rigid.z4).max())}
 
 
 def highpass(x, fs, cutoff):

@@ -16,8 +16,8 @@ from gpme_core.atomic import atomic_save_figure
 from .metrics import METRICS
 from .spec import PARAMETERS, unit_of
 
-HEAT_MAP_METRICS = ("vib_peak_m", "dev_peak_m", "flex_peak_rad", "drive_psi3_peak_Nm",
-                    "drive_z4_peak_N")
+HEAT_MAP_METRICS = ("vib_peak_m", "dev_peak_m", "flex_peak_rad", "psi3_dev_peak_rad",
+                    "drive_psi3_peak_Nm", "drive_z4_peak_N")
 # cells above this count are not annotated with their values (the text would overlap)
 MAX_ANNOTATED_CELLS = 80
 SAFE, UNSAFE, INFEASIBLE = 0, 1, 2

@@ -20,7 +20,7 @@ from . import metrics as mx
 from .spec import RunSettings, crane_changes
 
 # Bump when a metric's definition changes: finished points of older versions are recomputed.
-METRICS_VERSION = 3
+METRICS_VERSION = 4
 # s, longest RK4 step of the rigid crane: its fastest dynamics (5 Hz support, Baumgarte
 # 20 1/s) then have |h lambda| < 0.035, RK4's local error ~ |h lambda|^5 / 120 < 1e-9
 # relative; measured: end-effector positions differ by 1.1e-9 m from dt = 3.3e-4 s over 3 s
@@ -130,6 +130,7 @@ def _history_metrics(flex_sys, flex, rigid, settings, n_rfe):
     out.update(mx.flexible_coordinate_metrics(flex, cols))
     fs = 1.0 / float(np.median(np.diff(flex.t.to_numpy())))
     dr = mx.end_effector_deviation(flex, rigid)
+    out.update(mx.dependent_deviation(flex, rigid))
     out.update(mx.deviation_metrics(dr, fs, settings.min_frequency_hz, settings.transient))
     late = flex[flex.t >= settings.transient]
     out["vib_freq_hz"] = mx.dominant_frequency(late[cols].to_numpy(), fs,

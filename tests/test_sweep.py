@@ -164,6 +164,7 @@ def _direct(point, settings):
     dr = flex[["x_E", "y_E", "z_E"]].to_numpy() - rigid[["x_E", "y_E", "z_E"]].to_numpy()
     late = flex[flex.t >= settings.transient]
     return {"dev_peak_m": np.linalg.norm(dr, axis=1).max(),
+            "z4_dev_peak_m": np.abs(flex.z4 - rigid.z4).max(),
             "flex_peak_rad": flex[["psi_arm_1", "theta_arm_1", "phi_arm_1"]].abs().max().max(),
             "drive_psi3_peak_Nm": np.abs(f_r[:, names.index("psi3")]).max(),
             "drive_z4_peak_N": np.abs(f_r[:, names.index("z4")]).max(),
