@@ -54,15 +54,16 @@ _ROUND_OFF = ("round-off only: both engines evaluate the same closed-form quanti
 _FORCE = ("round-off only: sums of products of inertia, transforms and velocities; normwise "
           "relative to the largest entry")
 EPS = np.finfo(float).eps
-# eps cond(M) is the first-order forward error of one backward-stable solve; two engines'
-# errors add (x2) and the estimate gets a margin of 2: SOLVE_FACTOR = 4.
-SOLVE_FACTOR = 4.0
+# eps cond(M) is the first-order forward error of one backward-stable solve, an estimate
+# rather than a bound; two engines' errors add (x2) and the estimate gets a margin of 4
+# (the full run measured errors up to 1.5 eps cond(M) for the reactions): SOLVE_FACTOR = 8.
+SOLVE_FACTOR = 8.0
 _SOLVE = ("linear solve with M (aba / KKT in Pinocchio, Cholesky / reduced GPME in gpme): "
           "forward error ~eps cond(M) relative, and the RFEM arm makes M ill-conditioned "
           "(element torsion inertias ~1e-9 kg m^2 next to ~10 kg of crane: cond(M) up to ~3e7 "
-          "for n = 10); tol_rel = max(1e-12, 4 eps cond_2(M)) (x2 two engines, x2 margin), "
+          "for n = 10); tol_rel = max(1e-12, 8 eps cond_2(M)) (x2 two engines, x4 margin), "
           "here cond(M) = {cond:.1e}")
-_MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = 4 eps cond(M) "
+_MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = 8 eps cond(M) "
                "max|A^T lambda| ||A_dc^-T||_inf = {tol:.1e}")
 # Each tolerance: abs (in the quantity's unit, a floor for exact zeros such as h at rest)
 # and rel (normwise, to the largest entry of the Pinocchio value), with its reason.
@@ -72,7 +73,7 @@ TOLERANCES = {
     "M": Tolerance(1e-14, 1e-12, _FORCE + " (kg, kg m, kg m^2)"),
     "g": Tolerance(1e-12, 1e-12, _FORCE + " (N, N m)"),
     "h": Tolerance(1e-12, 1e-11, _FORCE + "; h cancels terms of size |M| |q_dot|^2, which "
-                   "can be 10x its result (measured up to 2e-13)"),
+                   "can be 100x its result (measured up to 5e-13)"),
     "applied tau": Tolerance(1e-12, 1e-12, "same springs/dampers from two sources (gpme model "
                              "vs Pinocchio's URDF damping + side-file springs): exact up to "
                              "one rounding"),
@@ -82,7 +83,9 @@ TOLERANCES = {
     "E drift": Tolerance(1e-12, 1e-11, _ROUND_OFF + "; the drift sums ~n^2 velocity "
                          "products (m/s^2)"),
     "Phi": Tolerance(1e-14, 1e-12, "constraint value at the two E positions; round-off"),
-    "Phi_dot": Tolerance(1e-13, 1e-12, "constraint rate from the two E velocities; round-off"),
+    "Phi_dot": Tolerance(1e-13, 1e-12, "constraint rate from the two E velocities; round-off. "
+                         "Phi_dot -> 0 on the constraint manifold, so along runs the abs "
+                         "floor (1/s for Phi_1, m/s for Phi_2) decides; measured <= 1e-14"),
     "constraint jacobian A": Tolerance(1e-14, 1e-12, "grad(phi)^T J at the two E states; "
                                        "round-off"),
     "constraint kappa": Tolerance(1e-12, 1e-11, "grad(phi).drift + p_dot^T Hess p_dot + ...; "
@@ -96,8 +99,8 @@ def solve_tolerances(m, reactions, a_dc):
     """Tolerances of the SOLVED quantities at one state.
 
     m (n, n) mass matrix, reactions (n,) A^T lambda (N, N m), a_dc (m, m) dependent
-    block of the constraint Jacobian.  rel = max(1e-12, 4 eps cond_2(M)) for all four;
-    the multipliers get abs = 4 eps cond(M) max|A^T lambda| ||A_dc^-T||_inf as well,
+    block of the constraint Jacobian.  rel = max(1e-12, 8 eps cond_2(M)) for all four;
+    the multipliers get abs = 8 eps cond(M) max|A^T lambda| ||A_dc^-T||_inf as well,
     because lambda = A_dc^-T (A^T lambda)_dc can be small beside the reactions.
     """
     cond = float(np.linalg.cond(m))
@@ -330,7 +333,7 @@ class RunPlan:
     urdf_segments: tuple
 
 
-FULL = RunPlan(n_random=100, n_run=50, t_run=1.0, urdf_segments=CRANE_SEGMENTS)
+FULL = RunPlan(n_random=300, n_run=100, t_run=1.0, urdf_segments=CRANE_SEGMENTS)
 QUICK = RunPlan(n_random=3, n_run=2, t_run=0.05, urdf_segments=(0, 3))
 
 
