@@ -407,10 +407,11 @@ def side_file_problems(side, label="side file"):
 def _chain(joints, link_names, problems):
     """Order the URDF tree as a serial chain.
 
-    Returns (root link, [(moving joint, T_parent_moving -> joint's parent link)],
-    {moving link: [(fixed link, T_moving_link_fixed_link)]}) where each moving joint's
-    origin is to be pre-multiplied by the transform from the previous moving link to the
-    joint's parent link (which differ when fixed joints sit in between).
+    Returns (root link, chain, fixed_of):
+    chain    : [(moving joint, T (4, 4) previous moving link (or root) frame -> the joint's
+               parent link frame)], identity unless fixed joints sit in between;
+    fixed_of : {moving link or root: [(fixed descendant, T (4, 4) link frame -> its frame)]}.
+    Appends to ``problems`` (branches, several roots, links not connected to the root).
     """
     children = {n: [] for n in link_names}
     parent_joint = {}
@@ -426,6 +427,16 @@ def _chain(joints, link_names, problems):
         problems.append(f"the URDF must have exactly one root link (a link that is no joint's "
                         f"child), found {roots}")
         return None, [], {}
+    reached, todo = {roots[0]}, [roots[0]]
+    while todo:
+        for j in children[todo.pop()]:
+            if j.child not in reached:
+                reached.add(j.child)
+                todo.append(j.child)
+    lost = [n for n in link_names if n not in reached]
+    if lost:
+        problems.append(f"links {lost} are not connected to the root link {roots[0]!r} "
+                        "(a cycle of joints?)")
 
     def closure(link):
         """Fixed descendants [(name, T_link_desc)] and moving joints [(joint, T_link_parent)]."""

@@ -359,3 +359,12 @@ def test_side_file_is_beside_and_validated(tmp_path):
     data = load_side_file(side)
     assert data["joints"]["z1"] == {"stiffness": 1e4, "spring_reference": 0.0}
     assert data["massless_links"] == ["arm_sde1_psi", "arm_sde1_theta"]
+
+
+def test_cycle_detached_from_the_root_is_named(tmp_path):
+    extra = """<link name="p"/><link name="r"/>
+        <joint name="pr" type="fixed"><parent link="p"/><child link="r"/></joint>
+        <joint name="rp" type="fixed"><parent link="r"/><child link="p"/></joint>"""
+    with pytest.raises(ModelFileError, match=r"links \['p', 'r'\] are not connected to the "
+                                             r"root link 'world'"):
+        read_urdf(_write(tmp_path, _chain_with(extra)))
