@@ -85,22 +85,27 @@ def heat_map(table, x, y, metric, limits=None):
     bad = cells[~cells["_feasible"]]
     if grid is not None:
         xs, ys, z = grid
-        zm = np.ma.masked_invalid(z)
-        mesh = ax.pcolormesh(_edges(xs), _edges(ys), zm, cmap="viridis", shading="flat")
+        finite = np.isfinite(z)
+        # one power of ten for the colour bar and the cell labels keeps the labels short
+        scale = 10.0 ** np.floor(np.log10(np.nanmax(np.abs(z)))) if finite.any() and \
+            np.nanmax(np.abs(z)) > 0 else 1.0
+        if scale != 1.0:
+            label = f"{metric} ({scale:.0e} {unit})"
+        mesh = ax.pcolormesh(_edges(xs), _edges(ys), np.ma.masked_invalid(z / scale),
+                             cmap="viridis", shading="flat")
         fig.colorbar(mesh, ax=ax, label=label)
         if len(cells) <= MAX_ANNOTATED_CELLS:
             for i, yv in enumerate(ys):
                 for j, xv in enumerate(xs):
-                    if np.isfinite(z[i, j]):
-                        ax.text(xv, yv, f"{z[i, j]:.2g}", ha="center", va="center",
+                    if finite[i, j]:
+                        ax.text(xv, yv, f"{z[i, j] / scale:.2g}", ha="center", va="center",
                                 fontsize=7, color="w")
         bound = (limits or {}).get(metric)
-        if bound is not None and np.isfinite(z).sum() >= 4 and len(xs) > 1 and len(ys) > 1:
-            finite = np.nanmin(z) < bound < np.nanmax(z)
-            if finite:
-                cs = ax.contour(xs, ys, np.where(np.isfinite(z), z, np.nanmax(z)), [bound],
-                                colors="r", linewidths=1.5)
-                ax.clabel(cs, fmt=f"limit {bound:g}", fontsize=7)
+        if bound is not None and finite.sum() >= 4 and len(xs) > 1 and len(ys) > 1 \
+                and np.nanmin(z) < bound < np.nanmax(z):
+            cs = ax.contour(xs, ys, np.ma.masked_invalid(z), [bound], colors="r",
+                            linewidths=1.5)
+            ax.clabel(cs, fmt=f"limit {bound:g}", fontsize=7)
         _mark_infeasible_cells(ax, bad, x, y, _edges(xs), _edges(ys), xs, ys)
     else:
         good = cells[cells["_feasible"]]
