@@ -11,6 +11,8 @@ class GpmeError(Exception):
 class ModelError(GpmeError, ValueError):
     """A model description is invalid (the message lists every problem found)."""
 
+    subject = "the model"
+
     def __init__(self, problems):
         if isinstance(problems, str):
             problems = [problems]
@@ -18,13 +20,15 @@ class ModelError(GpmeError, ValueError):
         if len(self.problems) == 1:
             msg = self.problems[0]
         else:
-            msg = f"{len(self.problems)} problems in the model:\n" + "\n".join(
+            msg = f"{len(self.problems)} problems in {self.subject}:\n" + "\n".join(
                 f"  - {p}" for p in self.problems)
         super().__init__(msg)
 
 
 class ModelFileError(ModelError):
     """A model file (URDF, side file) is malformed or uses an unsupported feature."""
+
+    subject = "the model file"
 
 
 class ConstraintError(GpmeError):

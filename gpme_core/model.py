@@ -286,6 +286,7 @@ class ChainBuilder:
         self._joints = []
         self._link_names = []
         self._link_h = []          # pseudo-inertia accumulated in the link frame
+        self._link_parts = []      # the RigidBodyInertia objects attached to each link
         self._frames = {}
         self._drives = []
         self._flex = []
@@ -308,6 +309,7 @@ class ChainBuilder:
                                   tuple(float(v) for v in limits)))
         self._link_names.append(link or name)
         self._link_h.append(None)
+        self._link_parts.append([])
         return len(self._joints) - 1
 
     def add_body(self, inertia, origin=None):
@@ -320,6 +322,7 @@ class ChainBuilder:
             raise ModelError(problems)
         x = self._pending_origin if origin is None else self._pending_origin @ np.asarray(origin, float)
         h = transform_pseudo_inertia(x, inertia.pseudo_inertia())
+        self._link_parts[-1].append(inertia if np.array_equal(x, np.eye(4)) else None)
         prev = self._link_h[-1]
         self._link_h[-1] = h if prev is None else prev + h
 
@@ -343,15 +346,21 @@ class ChainBuilder:
     def _set_pending_origin(self, t):
         self._pending_origin = np.asarray(t, dtype=float)
 
-    def _record_flexible(self, info):
+    def record_flexible_link(self, info):
+        """Record a FlexibleLinkInfo (done by add_beam; public for model readers that
+        rebuild an RFEM link from a file)."""
         self._flex.append(info)
+
+    _record_flexible = record_flexible_link
 
     def build(self):
         """Validate and return the immutable :class:`Model`."""
         links = []
-        for name, h in zip(self._link_names, self._link_h):
+        for name, h, parts in zip(self._link_names, self._link_h, self._link_parts):
             if h is None or h[3, 3] == 0.0:
                 links.append(Link(name, None))
+            elif len(parts) == 1 and parts[0] is not None:
+                links.append(Link(name, parts[0]))     # keep the user's numbers bit-exact
             else:
                 m, c, i_c = inertia_from_pseudo(h)
                 links.append(Link(name, RigidBodyInertia(m, c, i_c)))
