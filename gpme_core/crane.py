@@ -33,6 +33,7 @@ from .gpme import ProgrammedMotion
 from .inertia import cuboid, cylinder
 from .model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
 from .rfem import BeamProperties
+from .statics import static_equilibrium
 from .time_functions import Cosine, QuinticRamp
 
 
@@ -131,10 +132,15 @@ def crane_system(n_rfe=0, params=CraneParameters(), baumgarte=None):
                             baumgarte=bg)
 
 
-def initial_state(model, params=CraneParameters()):
+def initial_state(model, params=CraneParameters(), static_arm=False):
     """(q0, q_dot0) of the paper's off-manifold start: at rest, support spring unstretched,
-    psi2 = 0, arm at ``initial_psi3``, slider at ``initial_z4``, flexible coordinates 0."""
+    psi2 = 0, arm at ``initial_psi3``, slider at ``initial_z4``, flexible coordinates 0
+    (a straight arm), or with ``static_arm`` the arm's RFEM coordinates in their static
+    sag under gravity (the other coordinates held)."""
     q = np.zeros(model.n_coordinates)
     q[model.index("psi3")] = params.initial_psi3
     q[model.index("z4")] = params.initial_z4
+    if static_arm:
+        flex = [nm for nm in model.coordinate_names if "_arm_" in nm]
+        q = static_equilibrium(model, q, flex)
     return q, np.zeros(model.n_coordinates)
