@@ -89,7 +89,10 @@ def run_costs(t_end, cases, mujoco_dt):
                      "wall_s": rk4.attrs["wall_time_s"], "psi2_error_rad": err_rk4})
         print(f"  {label}: gpme RK4 {rows[-1]['wall_s']:.1f} s (psi2 error {err_rk4:.1e})",
               flush=True)
-        for method in ("DOP853", "Radau"):
+        # scipy's Radau (Python Newton iterations, finite-difference Jacobian) did not finish
+        # the flexible 10 s run in 12 minutes: the 8 Hz forced motion keeps its steps small,
+        # so it is timed on the rigid case only (docs/benchmarks.md)
+        for method in ("DOP853", "Radau") if n == 0 else ("DOP853",):
             for rtol in RTOLS:
                 try:
                     run = simulate(system, t_end, q0, qd0, method=method, rtol=rtol,

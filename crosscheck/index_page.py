@@ -37,10 +37,10 @@ def _meta_table(meta):
 
 
 def _summary_table(summary):
-    cols = ["passed", "engine", "model", "quantity", "n_compared", "worst_abs_error",
+    cols = ["passed", "engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "tol_abs", "tol_rel"]
     df = summary[cols].copy()
-    table = html_table(df, left_columns=("engine", "model", "quantity"))
+    table = html_table(df, left_columns=("engine", "section", "model", "quantity"))
     # link each check to its engine section
     for engine in summary["engine"].unique():
         table = table.replace(f"<td class='l'>{html.escape(engine)}</td>",

@@ -88,8 +88,14 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None):
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
     rows = pd.concat(tables.values(), ignore_index=True)
-    summary = summarise(rows)
-    summary.insert(0, "check", [f"{r.engine}/{r.model}/{r.quantity}" for r in summary.itertuples()])
+    if "section" not in rows.columns:
+        rows["section"] = None
+    # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
+    # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
+    rows["section"] = rows["section"].fillna("terms")
+    summary = summarise(rows, keys=("engine", "section", "model", "quantity"))
+    summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
+                                for r in summary.itertuples()])
     meta = environment(quick=quick, only=only, run_id=run_id,
                        wall_time_s=time.perf_counter() - start, step_times_s=timings)
     write_csv(summary, staging / "summary.csv")
@@ -128,8 +134,8 @@ def _point_latest(root, run_id):
 def main(args):
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
                                      progress=not args.no_progress)
-    cols = ["engine", "model", "quantity", "n_compared", "worst_abs_error", "worst_rel_error",
-            "passed"]
+    cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
+            "worst_rel_error", "passed"]
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[cols].to_string(index=False))
     n_fail = int((~summary["passed"]).sum())

@@ -19,6 +19,7 @@ from .dynamics import kinetic_energy, potential_energy
 from .errors import ConstraintError, GpmeError, ModelError, SimulationError
 
 METHODS = ("RK4", "RK45", "DOP853", "Radau")
+IMPLICIT_METHODS = ("Radau",)
 N_WORK = 3
 # |q| or |q_dot| above this means the run has blown up (SI units: m, rad, m/s, rad/s)
 DIVERGENCE_LIMIT = 1e6
@@ -147,9 +148,19 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n):
     def checked(t, y):
         _check_state(model, t, y, n)
         return rhs(t, y)
+    options = {}
+    if method in IMPLICIT_METHODS:
+        # structure of d(rhs)/dy: q_dot' = q_dot (identity block), q_ddot and the work
+        # rates depend on (q, q_dot) only; the work integrals feed back into nothing.  Without
+        # it, finite differences along the work columns find no change and their step
+        # factors overflow, and the implicit method crawls.
+        sparsity = np.zeros((len(y0), len(y0)), dtype=bool)
+        sparsity[:n, n:2 * n] = np.eye(n, dtype=bool)
+        sparsity[n:, :2 * n] = True
+        options["jac_sparsity"] = sparsity
     try:
         res = solve_ivp(checked, (0.0, t_end), y0, method=method, t_eval=t_eval, rtol=rtol,
-                        atol=atol)
+                        atol=atol, **options)
     except GpmeError:
         raise
     if not res.success:
