@@ -48,6 +48,21 @@ def _summary_table(summary):
     return table.replace("<table>", "<table id='summary'>", 1)
 
 
+def _benchmark_section(bench_dir):
+    """The latest `python -m benchmarks.bench` results beside the runs, if there are any."""
+    png, evals, runs = (bench_dir / "evaluation_costs.png", bench_dir / "evaluation_costs.csv",
+                        bench_dir / "run_costs.csv")
+    if not (png.exists() and evals.exists() and runs.exists()):
+        return []
+    import pandas as pd
+    return ["<h2 id='benchmarks'>Benchmarks (latest python -m benchmarks.bench)</h2>",
+            "<p>Measured separately from this run; see docs/benchmarks.md for the method. "
+            f"Files: <a href='../benchmarks/'>../benchmarks/</a>.</p>",
+            html_table(pd.read_csv(evals), status_column="-"),
+            html_table(pd.read_csv(runs), status_column="-", left_columns=("case", "engine", "method")),
+            _img(png, "cost of one constrained q_ddot evaluation against the number of coordinates")]
+
+
 def write_index(run_dir, summary, rows, runs, meta):
     """Write run_dir/index.html atomically."""
     run_dir = Path(run_dir)
@@ -87,6 +102,7 @@ def write_index(run_dir, summary, rows, runs, meta):
                                               "reason")))
         for png in sorted(run_dir.glob(f"{engine}_*.png")):
             parts.append(_img(png, png.stem.replace("_", " ")))
+    parts += _benchmark_section(run_dir.parent / "benchmarks")
     extra_css = ("<style>.banner{padding:.5rem;border-radius:4px}.ok{background:#dfd}"
                  ".bad{background:#fdd}table.meta{margin:.5rem 0}figure{margin:1rem 0}"
                  "figcaption{font-size:.85rem;color:#555}</style>")
