@@ -36,6 +36,25 @@ def _meta_table(meta):
     return f"<table class='meta'>{cells}</table>"
 
 
+def _overview(summary, rows):
+    """One line per engine: checks, failures, comparisons, the check closest to its
+    tolerance (largest error / (tol_abs + tol_rel * scale) over gated comparisons)."""
+    import numpy as np
+    import pandas as pd
+    out = []
+    ranked = worst_first(rows)
+    for engine, g in summary.groupby("engine", sort=False):
+        r = ranked[(ranked["engine"] == engine) & np.isfinite(ranked["error_over_tolerance"])]
+        worst = r.iloc[0] if len(r) else None
+        out.append({"engine": engine, "checks": len(g), "failed": int((~g["passed"]).sum()),
+                    "comparisons": int((rows["engine"] == engine).sum()),
+                    "closest to tolerance": "-" if worst is None else
+                    f"{worst['section']} / {worst['model']} / {worst['quantity']}",
+                    "error / tolerance": np.nan if worst is None else worst["error_over_tolerance"],
+                    "passed": not (~g["passed"]).any()})
+    return html_table(pd.DataFrame(out), left_columns=("engine", "closest to tolerance"))
+
+
 def _summary_table(summary):
     cols = ["passed", "engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "tol_abs", "tol_rel"]
@@ -73,6 +92,8 @@ def write_index(run_dir, summary, rows, runs, meta):
              f"{'ALL CHECKS PASSED' if ok else f'{n_fail} CHECK(S) FAILED'}</strong> — "
              f"{len(summary)} checks, {len(rows)} comparisons.</p>",
              _meta_table(meta),
+             "<h2 id='overview'>At a glance</h2>",
+             _overview(summary, rows),
              "<h2 id='summary-h'>Summary: one row per check</h2>",
              "<p>A check passes when, for every compared state or run, the largest absolute "
              "difference is at most tol_abs + tol_rel × max|engine value|. rel_error is that "
