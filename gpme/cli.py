@@ -17,6 +17,7 @@ def _simulate(args):
         try:
             runs[case] = paper.run_case(case, n_rfe=args.n_rfe, t_end=args.t_end, dt=args.dt,
                                         method=args.method, on_manifold=args.on_manifold,
+                                        static_arm=args.static_arm,
                                         progress=not args.no_progress)
         except GpmeError as exc:
             print(f"error: {exc}", file=sys.stderr)
@@ -68,6 +69,8 @@ def build_parser():
     sim.add_argument("--method", choices=("RK4", "RK45", "DOP853", "Radau"), default="RK4")
     sim.add_argument("--on-manifold", action="store_true",
                      help="start on the constraints instead of the paper's off-manifold start")
+    sim.add_argument("--static-arm", action="store_true",
+                     help="start the flexible arm in its gravity sag (default: straight)")
     sim.add_argument("--out", default="reports/simulate", help="output directory")
     sim.add_argument("--no-progress", action="store_true")
     sim.set_defaults(func=_simulate)

@@ -16,11 +16,12 @@ DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 
 def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_manifold=False,
-             params=CraneParameters(), progress=False, output_dt=1e-3):
-    """One run of the paper: case 'rigid' or 'flexible'; returns the history DataFrame."""
+             params=CraneParameters(), progress=False, output_dt=1e-3, static_arm=False):
+    """One run of the paper: case 'rigid' or 'flexible'; returns the history DataFrame.
+    static_arm: start the flexible arm in its gravity sag instead of straight."""
     n = 0 if case == "rigid" else n_rfe
     system = crane_system(n, params)
-    q0, qd0 = initial_state(system.model, params)
+    q0, qd0 = initial_state(system.model, params, static_arm=static_arm and n > 0)
     df = simulate(system, t_end, q0, qd0, dt=dt or DEFAULT_DT[case], method=method,
                   on_manifold=on_manifold, progress=progress, output_dt=output_dt)
     df.attrs["case"] = case

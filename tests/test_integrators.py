@@ -51,3 +51,11 @@ def test_simulate_command_reports_bad_input(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert "error:" in err and ("diverged" in err or "singular" in err or "outside its range" in err)
+
+
+def test_simulate_command_static_arm_starts_in_the_sag(tmp_path):
+    out = tmp_path / "static"
+    assert main(["simulate", "--case", "flexible", "--n-rfe", "1", "--t-end", "0.01", "--dt",
+                 "1e-4", "--static-arm", "--on-manifold", "--out", str(out), "--no-progress"]) == 0
+    df = pd.read_csv(out / "flexible.csv")
+    assert abs(df.psi_arm_1.iloc[0]) > 1e-4      # bent at t = 0, not straight
