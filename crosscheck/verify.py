@@ -48,7 +48,7 @@ def _paper_step(run_dir, quick, progress):
 
 def _engine_step(name, run_dir, quick, progress):
     module = __import__(f"crosscheck.{name}_check", fromlist=["run"])
-    return module.run(run_dir, quick=quick, progress=progress), None
+    return module.run(run_dir, quick=quick, progress=progress)
 
 
 def _crash_row(step, exc):
@@ -79,7 +79,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None):
             if step == "paper":
                 tables[step], runs = _paper_step(staging, quick, progress)
             else:
-                tables[step], _ = _engine_step(step, staging, quick, progress)
+                tables[step] = _engine_step(step, staging, quick, progress)
         except Exception as exc:  # a crashed step is a failed check, reported in full
             traceback.print_exc()
             tables[step] = _crash_row(step, exc)

@@ -56,15 +56,11 @@ def velocity_product_terms(model, q, q_dot):
     return -np.einsum("iab,iab->i", kin.S, g_acc)
 
 
-def _gamma(model):
-    return model.gamma
-
-
 def gravity_forces(model, q):
     """(n,) g = dE_p,g/dq (the generalized gravity force is -g)."""
     kin = _as_kin(model, q)
     first_moments = _reverse_cumsum(kin.T @ model.pseudo_inertias[:, :, 3:4])[:, :, 0]
-    return -np.einsum("a,iab,ib->i", _gamma(model), kin.S, first_moments)
+    return -np.einsum("a,iab,ib->i", model.gamma, kin.S, first_moments)
 
 
 def spring_forces(model, q):
@@ -99,7 +95,7 @@ def kinetic_energy(model, q, q_dot):
 def gravity_potential_energy(model, q):
     """J, E_p,g = -sum_l gamma^T T^(l) H^(l) e_4 (zero at the world origin)."""
     kin = _as_kin(model, q)
-    return -float(np.einsum("a,lab,lb->", _gamma(model), kin.T, model.pseudo_inertias[:, :, 3]))
+    return -float(np.einsum("a,lab,lb->", model.gamma, kin.T, model.pseudo_inertias[:, :, 3]))
 
 
 def spring_potential_energy(model, q):

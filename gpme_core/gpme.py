@@ -223,9 +223,6 @@ class ProgrammedMotion:
         sol = np.linalg.solve(k, rhs)
         return sol[:n], sol[n:]
 
-    def _unit(self, name):
-        return _unit_of(self.model, name)
-
     # --------------------------------------------------------------- initial states
     def consistent_state(self, t, q, q_dot, tol=1e-12, max_iter=50):
         """(q, q_dot) on the constraint manifold at time t: the dependent coordinates are
@@ -254,17 +251,11 @@ class ProgrammedMotion:
         if outside:
             raise ConstraintError(
                 f"cannot place the model on the constraints at t = {t:.6g} s: the solution "
-                "needs " + ", ".join(f"{nm} = {v:.6g} {self._unit(nm)} outside its range "
-                                     f"[{lo:g}, {hi:g}]" for nm, v, lo, hi in outside)
-                + "; the target is out of reach of the mechanism")
+                f"needs {outside}; the target is out of reach of the mechanism")
         gamma, inv_dc = self.velocity_map(a, t, q)
         phi_t = phi_dot - a @ q_dot
         q_dot[self.dc] = gamma @ q_dot[self.ic] - inv_dc @ phi_t
         return q, q_dot
-
-
-def _unit_of(model, name):
-    return "rad" if model.is_revolute[model.index(name)] else "m"
 
 
 def _rcond(a, inv):

@@ -16,7 +16,7 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
-from .errors import ConstraintError, GpmeError, ModelError, SimulationError
+from .errors import ConstraintError, ModelError, SimulationError
 
 METHODS = ("RK4", "RK45", "DOP853", "Radau")
 IMPLICIT_METHODS = ("Radau",)
@@ -93,11 +93,8 @@ def _check_state(model, t, y, n, dt=None):
     outside = model.limit_violations(q)
     if outside:
         raise ConstraintError(
-            f"at t = {t:.6g} s the motion reaches "
-            + ", ".join(f"{nm} = {v:.6g} {'rad' if model.is_revolute[model.index(nm)] else 'm'} "
-                        f"outside its range [{lo:g}, {hi:g}]" for nm, v, lo, hi in outside)
-            + ": the mechanism cannot follow it (a programmed motion that needs this cannot "
-            "be met)")
+            f"at t = {t:.6g} s the motion reaches {outside}: the mechanism cannot follow it "
+            "(a programmed motion that needs this cannot be met)")
 
 
 def rk4_step_plan(t_end, dt, output_dt):
@@ -158,11 +155,8 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n):
         sparsity[:n, n:2 * n] = np.eye(n, dtype=bool)
         sparsity[n:, :2 * n] = True
         options["jac_sparsity"] = sparsity
-    try:
-        res = solve_ivp(checked, (0.0, t_end), y0, method=method, t_eval=t_eval, rtol=rtol,
-                        atol=atol, **options)
-    except GpmeError:
-        raise
+    res = solve_ivp(checked, (0.0, t_end), y0, method=method, t_eval=t_eval, rtol=rtol,
+                    atol=atol, **options)
     if not res.success:
         raise SimulationError(f"solve_ivp({method}) failed at t = {res.t[-1] if len(res.t) else 0:.6g} s:"
                               f" {res.message}")

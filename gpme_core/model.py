@@ -160,10 +160,13 @@ class Model:
         return out
 
     def limit_violations(self, q):
-        """[(name, value, lower, upper)] for every coordinate of q outside its limits."""
+        """'name = value unit outside its range [lower, upper]' for every coordinate of q
+        outside its limits, joined by commas ('' when all are inside)."""
         bad = (q < self.lower_limits) | (q > self.upper_limits)
-        return [(self.coordinate_names[k], float(q[k]), float(self.lower_limits[k]),
-                 float(self.upper_limits[k])) for k in np.flatnonzero(bad)]
+        return ", ".join(
+            f"{self.coordinate_names[k]} = {q[k]:.6g} {'rad' if self.is_revolute[k] else 'm'} "
+            f"outside its range [{self.lower_limits[k]:g}, {self.upper_limits[k]:g}]"
+            for k in np.flatnonzero(bad))
 
     def stiffness_matrix(self):
         """(n, n) K of V = 1/2 (q - q_ref)^T K (q - q_ref)."""
@@ -350,8 +353,6 @@ class ChainBuilder:
         """Record a FlexibleLinkInfo (done by add_beam; public for model readers that
         rebuild an RFEM link from a file)."""
         self._flex.append(info)
-
-    _record_flexible = record_flexible_link
 
     def build(self):
         """Validate and return the immutable :class:`Model`."""

@@ -147,7 +147,7 @@ def discretise_beam(builder, name, beam, n_segments):
     if n == 0:
         builder.add_body(beam.element_inertia(beam.length))
         builder._set_pending_origin(tf.translation(beam.length))
-        builder._record_flexible(FlexibleLinkInfo(name, beam, 0, (), ()))
+        builder.record_flexible_link(FlexibleLinkInfo(name, beam, 0, (), ()))
         return
     dl = beam.length / n
     builder.add_body(beam.element_inertia(0.5 * dl))          # rfe 0 on the carrying link
@@ -165,4 +165,4 @@ def discretise_beam(builder, name, beam, n_segments):
             links.append(idx)
         builder.add_body(beam.element_inertia(dl if r < n else 0.5 * dl))
     builder._set_pending_origin(tf.translation(0.5 * dl))
-    builder._record_flexible(FlexibleLinkInfo(name, beam, n, tuple(joints), tuple(links)))
+    builder.record_flexible_link(FlexibleLinkInfo(name, beam, n, tuple(joints), tuple(links)))
