@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.atomic import atomic_save_figure, atomic_write_csv
-from gpme_core.crane import crane_system, initial_state
+from gpme_examples.crane import crane_system, initial_state
 from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate, suggest_rk4_step
 
@@ -126,10 +126,9 @@ def run_costs(t_end, cases, mujoco_dt):
 
 
 def plot(evals):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(6.5, 4.2))
+    ax = fig.subplots()
     for col, label in (("gpme_us", "gpme"), ("pinocchio_us", "Pinocchio from Python"),
                        ("mujoco_us", "MuJoCo mj_forward")):
         ax.loglog(evals.n_coordinates, evals[col], "o-", label=label)

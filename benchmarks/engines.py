@@ -14,10 +14,10 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from crosscheck import mujoco_mechanism as mech
-from crosscheck.mjcf import mjcf_text
-from crosscheck.mujoco_sim import simulate_mujoco, set_state, chain_map
-from crosscheck.pinocchio_model import from_gpme
+from crosscheck.mujoco import mechanism as mech
+from crosscheck.mujoco.mjcf import mjcf_text
+from crosscheck.mujoco.sim import simulate_mujoco, set_state, chain_map
+from crosscheck.pinocchio.model import from_gpme
 from gpme_core.errors import SimulationError
 from gpme_core.integrate import rk4_step_plan
 

@@ -5,16 +5,16 @@
 
 URDF part: the crane with the rigid arm and with the RFEM arm for n = 1, 3, 10
 segments, each as ``<name>.urdf`` plus its side file ``<name>.gpme.json``
-(crosscheck/urdf.py, docs/urdf.md).
+(gpme_io/urdf.py, docs/urdf.md).
 """
 import argparse
 import sys
 from pathlib import Path
 
-from gpme_core.crane import build_crane
+from gpme_examples.crane import build_crane
 
-from .report import atomic_write_text
-from .urdf import side_file_path, side_file_text, urdf_documents
+from .reports.tables import atomic_write_text
+from gpme_io.urdf import side_file_path, side_file_text, urdf_documents
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 URDF_DIR = REPO_ROOT / "models" / "urdf"

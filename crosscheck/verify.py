@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from .index_page import write_index
-from .report import atomic_write_text, summarise, write_csv
+from .reports.index_page import write_index
+from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
 STEPS = ("paper", "pinocchio", "mujoco")
@@ -30,7 +30,7 @@ def _say(msg):
 
 
 def _paper_step(run_dir, quick, progress):
-    from gpme_core import paper
+    from gpme_examples import paper
     from .paper_checks import paper_rows
     t_end = QUICK_T_END if quick else FULL_T_END
     runs = {}
@@ -47,7 +47,7 @@ def _paper_step(run_dir, quick, progress):
 
 
 def _engine_step(name, run_dir, quick, progress):
-    module = __import__(f"crosscheck.{name}_check", fromlist=["run"])
+    module = __import__(f"crosscheck.{name}.check", fromlist=["run"])
     return module.run(run_dir, quick=quick, progress=progress)
 
 

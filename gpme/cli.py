@@ -7,7 +7,7 @@ from pathlib import Path
 
 
 def _simulate(args):
-    from gpme_core import paper
+    from gpme_examples import paper
     from gpme_core.errors import GpmeError
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     runs = {}
@@ -34,9 +34,9 @@ def _simulate(args):
 
 def _crosscheck(args):
     if args.engine == "pinocchio":
-        from crosscheck import pinocchio_check as check
+        from crosscheck.pinocchio import check as check
     else:
-        from crosscheck import mujoco_check as check
+        from crosscheck.mujoco import check
     out = Path(args.out) if args.out else Path("reports") / time.strftime(f"{args.engine}-%Y%m%d-%H%M%S")
     df = check.run(out, quick=args.quick, progress=not args.no_progress)
     failed = df[~df["passed"].astype(bool)]

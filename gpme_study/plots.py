@@ -76,9 +76,10 @@ def _as_grid(cells, x, y, column):
 def heat_map(table, x, y, metric, limits=None):
     """Figure: ``metric`` over parameters x, y; infeasible cells grey with a cross, the
     contour metric = limit drawn when ``limits`` bounds this metric."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     cells = cell_table(table, x, y, metric)
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    fig = Figure(figsize=(6.4, 4.8))
+    ax = fig.subplots()
     unit = METRICS[metric][0]
     label = f"{metric} ({unit})"
     grid = _as_grid(cells, x, y, "_value")
@@ -138,14 +139,15 @@ def _mark_infeasible_cells(ax, bad, x, y, x_edges, y_edges, xs, ys):
 def safe_region(table, x, y, limits):
     """Figure: each (x, y) safe (all points feasible and within every limit), over a limit,
     or infeasible; the title lists the limits."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
     cells = cell_table(table, x, y, None, limits)
     cells["_class"] = np.where(~cells["_feasible"], INFEASIBLE,
                                np.where(cells["_safe"], SAFE, UNSAFE))
     colours = ["#4daf4a", "#ff7f00", "0.75"]
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    fig = Figure(figsize=(6.4, 4.8))
+    ax = fig.subplots()
     grid = _as_grid(cells, x, y, "_class")
     if grid is not None:
         xs, ys, z = grid
@@ -167,9 +169,6 @@ def safe_region(table, x, y, limits):
 def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS):
     """heatmap_<metric>.png for each metric with a finite value and safe_region.png (when
     limits are given) into <out_dir>/plots; returns {name: path}.  Needs two swept axes."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     if x is None or y is None or table.empty:
         return {}
     out = Path(out_dir) / "plots"
@@ -179,9 +178,7 @@ def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS):
         if metric in table and table[metric].notna().any():
             paths[f"heatmap_{metric}.png"] = out / f"heatmap_{metric}.png"
             atomic_save_figure(heat_map(table, x, y, metric, limits), paths[f"heatmap_{metric}.png"])
-            plt.close("all")
     if limits:
         paths["safe_region.png"] = out / "safe_region.png"
         atomic_save_figure(safe_region(table, x, y, limits), paths["safe_region.png"])
-        plt.close("all")
     return paths

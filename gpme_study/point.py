@@ -12,7 +12,7 @@ import traceback
 
 import numpy as np
 
-from gpme_core.crane import CraneParameters, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.errors import ConstraintError, ModelError, SimulationError
 from gpme_core.integrate import simulate, suggest_rk4_step
 

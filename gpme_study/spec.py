@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpme_core.crane import CraneParameters
+from gpme_examples.crane import CraneParameters
 from gpme_core.errors import ModelError
 
 from .metrics import METRICS

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gpme_core import transforms as tf
-from gpme_core.crane import build_crane
+from gpme_examples.crane import build_crane
 from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
 

@@ -3,7 +3,7 @@ E(t) - E(0) = W_drive + W_reaction - W_dissipated with dampers, drive and constr
 import numpy as np
 import pytest
 
-from gpme_core.crane import CraneParameters, build_crane, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, build_crane, crane_system, initial_state
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 

@@ -4,7 +4,7 @@ import pytest
 
 from gpme_core import dynamics as dy
 from gpme_core import fast
-from gpme_core.crane import build_crane
+from gpme_examples.crane import build_crane
 from gpme_core.kinematics import chain_kinematics
 
 pytestmark = pytest.mark.skipif(not fast.ENABLED, reason="GPME_NO_JIT=1: numpy path only")

@@ -6,7 +6,7 @@ import sympy as sp
 
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                                    SympyPointConstraint)
-from gpme_core.crane import CraneParameters, crane_constraints, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_constraints, crane_system, initial_state
 from gpme_core.errors import ConstraintError, ModelError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate

@@ -4,7 +4,7 @@ import pandas as pd
 import pytest
 
 from gpme.cli import main
-from gpme_core.crane import crane_system, initial_state
+from gpme_examples.crane import crane_system, initial_state
 from gpme_core.integrate import simulate
 
 

@@ -5,14 +5,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from crosscheck import generate_mjcf as gen
-from crosscheck import mujoco_mechanism as mech
-from crosscheck.mjcf import _quat, mjcf_text
-from crosscheck.mujoco_sim import chain_map, drive_callback, equality_violations
-from crosscheck.mujoco_terms import sample_states, term_rows
+from crosscheck.mujoco import generate_mjcf as gen
+from crosscheck.mujoco import mechanism as mech
+from crosscheck.mujoco.mjcf import _quat, mjcf_text
+from crosscheck.mujoco.sim import chain_map, drive_callback, equality_violations
+from crosscheck.mujoco.terms import sample_states, term_rows
 from gpme_core import transforms as tf
 from gpme_core.constraints import CoordinateProgramme, EllipseConstraint, JointProgramme
-from gpme_core.crane import CraneParameters, build_crane, crane_constraints, crane_system, \
+from gpme_examples.crane import CraneParameters, build_crane, crane_constraints, crane_system, \
     initial_state
 from gpme_core.errors import ModelError
 from gpme_core.inertia import cuboid

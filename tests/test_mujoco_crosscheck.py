@@ -3,9 +3,9 @@ the harness can fail: a stiffness changed in the MuJoCo model only is reported."
 import pandas as pd
 import pytest
 
-from crosscheck import mujoco_cases as cases
-from crosscheck import mujoco_check
-from crosscheck.mjcf import mjcf_text
+from crosscheck.mujoco import cases as cases
+from crosscheck.mujoco import check as mujoco_check
+from crosscheck.mujoco.mjcf import mjcf_text
 
 
 @pytest.fixture(scope="module")

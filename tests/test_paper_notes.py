@@ -1,7 +1,7 @@
 """Each departure from the paper's text listed in docs/paper-notes.md, backed by a check."""
 import numpy as np
 
-from gpme_core.crane import CraneParameters, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.dynamics import velocity_product_terms
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics

@@ -1,4 +1,4 @@
-"""The term-by-term Pinocchio crosscheck (crosscheck/pinocchio_check.py): a reduced run,
+"""The term-by-term Pinocchio crosscheck (crosscheck/pinocchio/check.py): a reduced run,
 and proof that the harness fails when one engine is perturbed by 1e-6."""
 import dataclasses
 
@@ -7,8 +7,8 @@ import pandas as pd
 import pinocchio as pin
 import pytest
 
-from crosscheck import pinocchio_check as pc
-from gpme_core.crane import CraneParameters, crane_constraints
+from crosscheck.pinocchio import check as pc
+from gpme_examples.crane import CraneParameters, crane_constraints
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import RigidBodyInertia
 

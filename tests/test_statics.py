@@ -3,7 +3,7 @@ cantilever deflection it implies against beam theory."""
 import numpy as np
 import pytest
 
-from gpme_core.crane import CraneParameters, build_crane, initial_state
+from gpme_examples.crane import CraneParameters, build_crane, initial_state
 from gpme_core.dynamics import gravity_forces, spring_forces
 from gpme_core.errors import ConstraintError
 from gpme_core.kinematics import link_transforms

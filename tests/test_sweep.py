@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from gpme.cli import main as gpme_main
-from gpme_core.crane import CraneParameters, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.integrate import simulate
 from gpme_study import metrics as mx
 from gpme_study.plots import safe_mask, write_plots

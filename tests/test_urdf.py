@@ -1,4 +1,4 @@
-"""URDF writer/reader (crosscheck/urdf.py) and the committed files in models/urdf/."""
+"""URDF writer/reader (gpme_io/urdf.py) and the committed files in models/urdf/."""
 import shutil
 import subprocess
 import textwrap
@@ -8,9 +8,9 @@ import pinocchio as pin
 import pytest
 
 from crosscheck import generate_models
-from crosscheck.urdf import (MUJOCO_BOUND, UNLIMITED, load_side_file, read_urdf,
+from gpme_io.urdf import (MUJOCO_BOUND, UNLIMITED, load_side_file, read_urdf,
                              side_file_path, write_urdf)
-from gpme_core.crane import CraneParameters, build_crane
+from gpme_examples.crane import CraneParameters, build_crane
 from gpme_core.dynamics import gravity_forces, mass_matrix, velocity_product_terms
 from gpme_core.errors import ModelFileError
 from gpme_core.model import REVOLUTE

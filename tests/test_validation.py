@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gpme_core import transforms as tf
-from gpme_core.crane import CraneParameters, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.errors import ModelError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import RigidBodyInertia, check_pseudo_inertia, cuboid

@@ -21,7 +21,7 @@ MuJoCo realisation (all auxiliary bodies in their own kinematic trees, no contac
             a tendon equality: with the foci at E's height this is exactly Phi_1 = 0.
 
 This module only computes numbers (focus positions, the auxiliary coordinates that match
-a crane state); crosscheck.mjcf writes them as XML.
+a crane state); crosscheck.mujoco.mjcf writes them as XML.
 """
 from dataclasses import dataclass
 

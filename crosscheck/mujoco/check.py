@@ -18,17 +18,17 @@ import mujoco
 import numpy as np
 import pandas as pd
 
-from gpme_core.crane import initial_state
+from gpme_examples.crane import initial_state
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 
-from . import mujoco_cases as cases
-from . import mujoco_mechanism as mech
-from .compare import Tolerance, compare
+from . import cases
+from . import mechanism as mech
+from ..compare import Tolerance, compare
 from .mjcf import mjcf_text
-from .mujoco_report import write_report
-from .mujoco_sim import simulate_mujoco
-from .mujoco_terms import ENGINE, sample_states, term_rows
+from .report import write_report
+from .sim import simulate_mujoco
+from .terms import ENGINE, sample_states, term_rows
 
 TERM_SEED = 20261122
 NOT_GATED = "not gated: {}"
@@ -85,7 +85,7 @@ def _largest_flex(model, g, mj):
 def terms_section(p, log):
     rows = []
     for n in p.term_models:
-        from gpme_core.crane import build_crane
+        from gpme_examples.crane import build_crane
         model = build_crane(n)
         mj = _load(model, cases.DT)
         for r in term_rows(model, mj, sample_states(model, p.term_states, TERM_SEED + n)):

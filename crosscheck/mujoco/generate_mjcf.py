@@ -1,7 +1,7 @@
 """Write or check the committed MJCF files under models/mjcf/.
 
-    python -m crosscheck.generate_mjcf            # (re)write every file
-    python -m crosscheck.generate_mjcf --check    # exit 1 when a committed file drifted
+    python -m crosscheck.mujoco.generate_mjcf            # (re)write every file
+    python -m crosscheck.mujoco.generate_mjcf --check    # exit 1 when a committed file drifted
 
 Files (each loads with mujoco.MjModel.from_xml_path; tests/test_mjcf.py checks that):
 
@@ -19,13 +19,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from gpme_core.crane import build_crane, crane_constraints, crane_system, initial_state
+from gpme_examples.crane import build_crane, crane_constraints, crane_system, initial_state
 
 from .mjcf import mjcf_text
-from .mujoco_mechanism import MechanismSettings
-from .report import atomic_write_text
+from .mechanism import MechanismSettings
+from ..reports.tables import atomic_write_text
 
-DEFAULT_DIR = Path(__file__).resolve().parents[1] / "models" / "mjcf"
+DEFAULT_DIR = Path(__file__).resolve().parents[2] / "models" / "mjcf"
 TIMESTEPS = {0: 1e-4, 1: 1e-4, 2: 2.5e-5, 3: 1e-5}   # s, by number of RFEM segments
 KEYFRAME_DIGITS = 12   # round the keyframe so round-off changes in gpme_core do not drift it
 
@@ -86,7 +86,7 @@ def main(argv=None):
     if args.check:
         problems = drift(args.out)
         if problems:
-            print("MJCF drift (run python -m crosscheck.generate_mjcf):\n  " + "\n  ".join(problems))
+            print("MJCF drift (run python -m crosscheck.mujoco.generate_mjcf):\n  " + "\n  ".join(problems))
             return 1
         print(f"{len(mjcf_documents())} MJCF files in {args.out} match the generator")
         return 0

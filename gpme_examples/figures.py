@@ -1,13 +1,11 @@
-"""Figures of a programmed-motion run, after the paper's Figs. 2 and 3 (matplotlib, Agg).
+"""Figures of a programmed-motion run, after the paper's Figs. 2 and 3 (matplotlib).
 
 Each function takes run DataFrames from gpme_core.integrate.simulate keyed by a case
-label and returns a matplotlib Figure; the caller saves or embeds it.
+label and returns a matplotlib Figure (object API: no pyplot state, no backend is
+switched); the caller saves or embeds it.
 """
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
 MAIN_COORDINATES = (("z1", "z$^{(1)}$ [m]"), ("psi2", r"$\psi^{(2)}$ [rad]"),
                     ("psi3", r"$\psi^{(3,0)}$ [rad]"), ("z4", "z$^{(4)}$ [m]"))
@@ -23,7 +21,8 @@ def joint_coordinates(runs):
     shows the largest-amplitude flexible coordinate of each flexible case."""
     flex = {k: _flexible_columns(df) for k, df in runs.items()}
     n_panels = len(MAIN_COORDINATES) + (1 if any(flex.values()) else 0)
-    fig, axes = plt.subplots(n_panels, 1, figsize=(8, 2.0 * n_panels), sharex=True)
+    fig = Figure(figsize=(8, 2.0 * n_panels))
+    axes = fig.subplots(n_panels, 1, sharex=True)
     for (col, label), ax in zip(MAIN_COORDINATES, axes):
         for (case, df), ls in zip(runs.items(), STYLES):
             ax.plot(df.t, df[col], ls, lw=1.0, label=case)
@@ -48,7 +47,8 @@ def joint_coordinates(runs):
 def end_effector(runs, params):
     """Fig. 3: end-effector path in the x-y plane over the target ellipse, and z_E(t)
     over the programme z_a(t) = z0 + A cos(2 pi t / T)."""
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fig = Figure(figsize=(11, 4.6))
+    ax1, ax2 = fig.subplots(1, 2)
     s = np.linspace(0, 2 * np.pi, 400)
     ax1.plot(params.ellipse_a * np.cos(s), params.ellipse_b * np.sin(s), "k-", lw=2.5,
              alpha=0.25, label="target ellipse")
@@ -76,7 +76,8 @@ def end_effector(runs, params):
 
 def constraint_violation(runs, names=("Phi_1", "Phi_2")):
     """|Phi_k| against time on a log scale for every case."""
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig = Figure(figsize=(8, 3.6))
+    ax = fig.subplots()
     for (case, df), ls in zip(runs.items(), STYLES):
         for name, color in zip(names, ("C0", "C3")):
             ax.semilogy(df.t, np.maximum(df[name].abs(), 1e-18), ls, color=color, lw=0.8,

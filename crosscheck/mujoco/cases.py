@@ -9,10 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gpme_core.crane import CraneParameters, build_crane, crane_constraints, crane_system
+from gpme_examples.crane import CraneParameters, build_crane, crane_constraints, crane_system
 
-from .compare import Tolerance
-from .mujoco_mechanism import MechanismSettings
+from ..compare import Tolerance
+from .mechanism import MechanismSettings
 
 DT = 1e-4                  # s, RK4 step of both engines in the gated runs
 OUTPUT_DT = 1e-2           # s, spacing of the compared samples

@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from gpme_core.errors import ModelFileError
 
-from .urdf import load_side_file, side_file_path
+from gpme_io.urdf import load_side_file, side_file_path
 
 _AXES = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
 

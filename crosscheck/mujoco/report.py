@@ -1,15 +1,12 @@
 """CSV and self-contained HTML page (with plots) of the MuJoCo crosscheck."""
 import html
 
-import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from .report import (atomic_write_bytes, atomic_write_text, figure_data_uri,  # noqa: E402
-                     html_page, html_table, summarise, worst_first, write_csv)
+from ..reports.tables import (atomic_write_bytes, atomic_write_text, figure_data_uri,
+                              html_page, html_table, summarise, worst_first, write_csv)
 
 MAIN = ("z1", "psi2", "psi3", "z4")
 TINY = 1e-18   # floor for log plots of differences
@@ -25,7 +22,8 @@ def _coords(model, g, mj):
 
 def _trajectory_figure(title, model, g, mj):
     cols = _coords(model, g, mj)
-    fig, axes = plt.subplots(2, len(cols), figsize=(3.2 * len(cols), 5.0), squeeze=False)
+    fig = Figure(figsize=(3.2 * len(cols), 5.0))
+    axes = fig.subplots(2, len(cols), squeeze=False)
     for k, c in enumerate(cols):
         ax = axes[0, k]
         ax.plot(g["t"], g[c], label="gpme", lw=1.6)
@@ -40,12 +38,12 @@ def _trajectory_figure(title, model, g, mj):
     fig.suptitle(title)
     fig.tight_layout()
     uri = figure_data_uri(fig)
-    plt.close(fig)
     return uri
 
 
 def _off_manifold_figure(model, g, variants):
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.6))
+    fig = Figure(figsize=(14, 3.6))
+    axes = fig.subplots(1, 4)
     for k, c in enumerate(("psi3", "z4")):
         axes[k].plot(g["t"], g[c], label="gpme (Baumgarte 20, 20)", lw=1.6)
         for label, mj in variants.items():
@@ -63,12 +61,12 @@ def _off_manifold_figure(model, g, variants):
     fig.suptitle(f"{model.name}: off-manifold start")
     fig.tight_layout()
     uri = figure_data_uri(fig)
-    plt.close(fig)
     return uri
 
 
 def _energy_figure(title, g, mj):
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
+    fig = Figure(figsize=(9, 3.2))
+    axes = fig.subplots(1, 2)
     for k, c in enumerate(("E_kin", "E_pot")):
         axes[k].plot(g["t"], g[c], label="gpme")
         axes[k].plot(mj["t"], mj[c], "--", label="MuJoCo")
@@ -78,7 +76,6 @@ def _energy_figure(title, g, mj):
     fig.suptitle(title)
     fig.tight_layout()
     uri = figure_data_uri(fig)
-    plt.close(fig)
     return uri
 
 

@@ -27,14 +27,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import transforms as tf
-from .constraints import CoordinateProgramme, EllipseConstraint
-from .gpme import ProgrammedMotion
-from .inertia import cuboid, cylinder
-from .model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
-from .rfem import BeamProperties
-from .statics import static_equilibrium
-from .time_functions import Cosine, QuinticRamp
+from gpme_core import transforms as tf
+from gpme_core.constraints import CoordinateProgramme, EllipseConstraint
+from gpme_core.gpme import ProgrammedMotion
+from gpme_core.inertia import cuboid, cylinder
+from gpme_core.model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
+from gpme_core.rfem import BeamProperties
+from gpme_core.statics import static_equilibrium
+from gpme_core.time_functions import Cosine, QuinticRamp
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
                              FlexibleLinkInfo, Model, validate_model)
 from gpme_core.rfem import BeamProperties
 
-from .report import atomic_write_text
+from gpme_core.atomic import atomic_write_text
 
 ROOT_LINK = "world"
 SIDE_SUFFIX = ".gpme.json"
@@ -138,7 +138,7 @@ def urdf_documents(model, include_drives=True, urdf_name=None):
         raise ModelFileError(problems)
     robot = ET.Element("robot", name=model.name)
     robot.append(ET.Comment(
-        f" Generated from gpme model {model.name!r} by crosscheck.urdf; do not edit. "
+        f" Generated from gpme model {model.name!r} by gpme_io.urdf; do not edit. "
         f"Stiffness, spring references, gravity and drives are in the side file "
         f"{(urdf_name or model.name)}{SIDE_SUFFIX} (docs/urdf.md). "))
     mj = ET.SubElement(robot, "mujoco")

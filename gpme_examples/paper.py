@@ -4,9 +4,9 @@ import time
 from pathlib import Path
 
 from . import figures
-from .atomic import atomic_save_figure, atomic_write_csv
+from gpme_core.atomic import atomic_save_figure, atomic_write_csv
 from .crane import CraneParameters, crane_system, initial_state
-from .integrate import simulate
+from gpme_core.integrate import simulate
 
 DEFAULT_N_RFE = 3
 # RK4 steps: the rigid crane's fastest motion is the 5 Hz support and the 20 1/s
@@ -42,8 +42,6 @@ def write_outputs(runs, out_dir, params=CraneParameters()):
     for name, fig in figs.items():
         paths[name] = out / name
         atomic_save_figure(fig, paths[name])
-    import matplotlib.pyplot as plt
-    plt.close("all")
     return paths
 
 

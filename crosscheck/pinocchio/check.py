@@ -33,16 +33,16 @@ import pandas as pd
 import pinocchio as pin
 
 from gpme_core.constraints import PointConstraint
-from gpme_core.crane import CraneParameters, crane_constraints, crane_system, initial_state
+from gpme_examples.crane import CraneParameters, crane_constraints, crane_system, initial_state
 from gpme_core.errors import ConstraintError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 
-from . import report
-from .compare import Tolerance, compare
-from .pinocchio_model import from_gpme, from_urdf
-from .urdf import read_urdf, write_urdf
+from ..reports import tables as report
+from ..compare import Tolerance, compare
+from .model import from_gpme, from_urdf
+from gpme_io.urdf import read_urdf, write_urdf
 
 ENGINE = "pinocchio"
 SEED = 20240611
@@ -122,7 +122,7 @@ class ModelCase:
 
     label  : model column of the report, e.g. "crane_flexible_n3 (URDF)"
     system : gpme_core.gpme.ProgrammedMotion (dependent coordinates fixed)
-    pin    : crosscheck.pinocchio_model.PinocchioSystem
+    pin    : crosscheck.pinocchio.model.PinocchioSystem
     """
 
     label: str
@@ -200,7 +200,7 @@ def crane_case(n_rfe, params=CraneParameters()):
 
 
 def urdf_case(n_rfe, urdf_dir, params=CraneParameters()):
-    """The crane written to URDF, read back by crosscheck.urdf (gpme) and by Pinocchio."""
+    """The crane written to URDF, read back by gpme_io.urdf (gpme) and by Pinocchio."""
     original = crane_system(n_rfe, params).model
     path, _ = write_urdf(original, Path(urdf_dir) / f"{original.name}.urdf")
     model = read_urdf(path)

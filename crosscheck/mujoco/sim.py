@@ -15,13 +15,13 @@ import pandas as pd
 
 from gpme_core.errors import ModelError, SimulationError
 
-from . import mujoco_mechanism as mech
+from . import mechanism as mech
 from .mjcf import body_groups
 
 
 @dataclass(frozen=True)
 class ChainMap:
-    """Where gpme's coordinates live in a MuJoCo model built by crosscheck.mjcf.
+    """Where gpme's coordinates live in a MuJoCo model built by crosscheck.mujoco.mjcf.
 
     qpos (n,), dof (n,) : addresses of the chain joints, ordered as the gpme coordinates
     bodies (b,)         : MuJoCo body ids of the chain (auxiliary bodies excluded)

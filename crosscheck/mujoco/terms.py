@@ -14,8 +14,8 @@ import numpy as np
 
 from gpme_core import dynamics as dyn
 
-from .compare import Tolerance, compare
-from .mujoco_sim import chain_map, drive_callback
+from ..compare import Tolerance, compare
+from .sim import chain_map, drive_callback
 
 ENGINE = "mujoco"
 # Both engines evaluate the same sums of products of O(1) numbers in a different order

@@ -4,7 +4,7 @@ import base64
 import html
 from pathlib import Path
 
-from .report import atomic_write_text, html_page, html_table, worst_first
+from .tables import atomic_write_text, html_page, html_table, worst_first
 
 PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
                   "flexible crane (paper Fig. 2)"),

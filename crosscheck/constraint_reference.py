@@ -1,0 +1,178 @@
+"""Programmed constraints derived on the reference side, independently of gpme's formulas.
+
+gpme evaluates a point constraint phi(x, y, z, t) with its own chain-rule formula
+(gpme_core.constraints: kappa = grad . drift + p_dot^T Hess p_dot + 2 grad_t . p_dot + phi_tt).
+A crosscheck that reused that formula would repeat any slip in it, so here SymPy
+differentiates the composite function Phi(t) = phi(x(t), y(t), z(t), t) twice with respect to
+time, with x(t), y(t), z(t) as undetermined functions, and the derivatives are then replaced
+by symbols:
+
+    Phi_dot  = dPhi/dt        with x' -> v_x ...            (affine in v)
+    Phi_ddot = d^2 Phi/dt^2   with x' -> v_x, x'' -> a_x ... (affine in a)
+
+With the engine's point velocity v = J q_dot and classical acceleration a = J q_ddot + drift
+(drift = a at q_ddot = 0), the constraint row is A = dPhi_dot/dv . J and
+kappa = Phi_ddot(a = drift).  The input expression is the task definition itself (the
+model file's string, or the built-in ellipse / coordinate programme rebuilt here from its
+parameters); only the derivatives are computed here.
+
+A joint programme q_k = f(t) gives Phi = q_k - f, A = e_k, kappa = -f''(t), f'' from SymPy.
+
+Frames and units: p, v, a in the world frame (m, m/s, m/s^2); J (3, n) m or m/rad.
+"""
+from dataclasses import dataclass, fields
+from typing import Callable, Optional
+
+import numpy as np
+import sympy as sp
+from numpy.typing import NDArray
+
+from gpme_core import constraints as gc
+from gpme_core import time_functions as tfn
+
+T = sp.Symbol("t", real=True)
+XYZ = sp.symbols("x y z", real=True)
+_V = sp.symbols("v_x v_y v_z", real=True)
+_A = sp.symbols("a_x a_y a_z", real=True)
+
+
+def time_expression(function) -> Optional[sp.Expr]:
+    """SymPy expression in t of a gpme time function, rebuilt from its parameters, or None
+    when it has no closed form here (a tabulated function)."""
+    if isinstance(function, tfn.SympyTimeFunction):
+        return sp.sympify(function.expr).subs(sp.Symbol("t"), T)
+    name = type(function).__name__
+    p = {f.name: getattr(function, f.name) for f in fields(function)} \
+        if hasattr(function, "__dataclass_fields__") else {}
+    if name == "Constant":
+        return sp.Float(p["level"])
+    if name == "Cosine":
+        return p["offset"] + p["amplitude"] * sp.cos(2 * sp.pi * T / p["period"])
+    if name == "Sine":
+        return p["offset"] + p["amplitude"] * sp.sin(2 * sp.pi * T / p["period"]
+                                                       + p.get("phase", 0.0))
+    if name == "QuinticRamp":
+        s = T / p["ramp_time"]
+        ramp = p["level"] * s ** 3 * (10 - 15 * s + 6 * s ** 2)
+        return sp.Piecewise((0, T < 0), (ramp, T < p["ramp_time"]), (p["level"], True))
+    return None
+
+
+def _time_derivatives(function) -> Callable[[float], tuple]:
+    """t -> (f, f', f'') of a time function, by SymPy where it has a closed form, else by
+    an independent cubic spline of its table (scipy) for tabulated functions."""
+    expr = time_expression(function)
+    if expr is not None:
+        f = sp.lambdify(T, [expr, sp.diff(expr, T), sp.diff(expr, T, 2)], "numpy")
+        return lambda t: tuple(float(v) for v in f(t))
+    if hasattr(function, "times") and hasattr(function, "values"):
+        from scipy.interpolate import CubicSpline
+        spline = CubicSpline(np.asarray(function.times, float), np.asarray(function.values, float),
+                             bc_type="natural")
+        t0, t1 = float(function.times[0]), float(function.times[-1])
+
+        def tabulated(t):
+            if t <= t0 or t >= t1:     # constant outside the table
+                return float(spline(min(max(t, t0), t1))), 0.0, 0.0
+            return float(spline(t)), float(spline(t, 1)), float(spline(t, 2))
+        return tabulated
+    raise TypeError(f"no reference form for the time function {function!r}")
+
+
+def point_expression(spec) -> sp.Expr:
+    """phi(x, y, z, t) of a point-constraint spec, rebuilt from its parameters."""
+    x, y, z = XYZ
+    if isinstance(spec, gc.SympyPointConstraint):
+        sym = {sp.Symbol(n): s for n, s in zip(("x", "y", "z", "t"), (*XYZ, T))}
+        return sp.sympify(spec.expr).subs(sym)
+    if isinstance(spec, gc.EllipseConstraint):
+        xc, yc = (float(c) for c in spec.center)
+        return ((x - xc) / spec.a) ** 2 + ((y - yc) / spec.b) ** 2 - 1
+    if isinstance(spec, gc.CoordinateProgramme):
+        f = time_expression(spec.function)
+        if f is None:
+            raise TypeError(f"constraint {spec.name!r}: no closed form for {spec.function!r}")
+        return XYZ[spec.axis] - f
+    raise TypeError(f"constraint {getattr(spec, 'name', spec)!r}: no reference derivation for "
+                    f"{type(spec).__name__}")
+
+
+@dataclass(frozen=True)
+class ReferencePointConstraint:
+    """phi(x, y, z, t) = 0 on the origin of model frame ``frame``, derived independently.
+
+    evaluate(t, p, v, jacobian, drift) -> (Phi, Phi_dot, A (n,), kappa)
+    """
+
+    name: str
+    frame: str
+    expression: sp.Expr
+    _f: Callable
+
+    @classmethod
+    def from_expression(cls, name, frame, expression):
+        fx, fy, fz = (sp.Function(n, real=True)(T) for n in ("X", "Y", "Z"))
+        composite = expression.subs({XYZ[0]: fx, XYZ[1]: fy, XYZ[2]: fz})
+        first = sp.diff(composite, T)
+        second = sp.diff(first, T)
+        subs2 = {sp.diff(g, T, 2): a for g, a in zip((fx, fy, fz), _A)}
+        subs1 = {sp.diff(g, T): v for g, v in zip((fx, fy, fz), _V)}
+        back = {g: s for g, s in zip((fx, fy, fz), XYZ)}
+        phi_dot = first.subs(subs1).subs(back)
+        phi_ddot = second.subs(subs2).subs(subs1).subs(back)
+        dphi_dot_dv = [sp.diff(phi_dot, v) for v in _V]
+        f = sp.lambdify((*XYZ, T, *_V, *_A), [expression, phi_dot, dphi_dot_dv, phi_ddot],
+                        "numpy")
+        return cls(name, frame, expression, f)
+
+    def evaluate(self, t: float, p: NDArray, v: NDArray, jacobian: NDArray, drift: NDArray):
+        phi, phi_dot, grad_v, kappa = self._f(*p, t, *v, *drift)
+        row = np.asarray(grad_v, dtype=float) @ np.asarray(jacobian, dtype=float)
+        return float(phi), float(phi_dot), row, float(kappa)
+
+
+@dataclass(frozen=True)
+class ReferenceJointProgramme:
+    """q_k - f(t) = 0 for coordinate ``coordinate`` (index ``index``)."""
+
+    name: str
+    coordinate: str
+    index: int
+    _f: Callable
+
+    def evaluate(self, t: float, q: NDArray, q_dot: NDArray, n: int):
+        f, f_dot, f_ddot = self._f(t)
+        row = np.zeros(n)
+        row[self.index] = 1.0
+        return float(q[self.index] - f), float(q_dot[self.index] - f_dot), row, -f_ddot
+
+
+def reference_constraints(specs, coordinate_names):
+    """The reference form of each gpme constraint spec (same order and names)."""
+    out = []
+    for spec in specs:
+        if isinstance(spec, gc.JointProgramme):
+            out.append(ReferenceJointProgramme(spec.name, spec.coordinate,
+                                               list(coordinate_names).index(spec.coordinate),
+                                               _time_derivatives(spec.function)))
+        else:
+            out.append(ReferencePointConstraint.from_expression(spec.name, spec.frame,
+                                                                point_expression(spec)))
+    return out
+
+
+def evaluate_reference(refs, t, q, q_dot, point_state):
+    """(Phi (m,), Phi_dot (m,), A (m, n), kappa (m,)) of reference constraints ``refs``.
+
+    point_state : frame name -> (p (3,), v (3,), J (3, n), drift (3,)) from the engine.
+    """
+    n = len(q)
+    m = len(refs)
+    phi, phi_dot, kappa = np.empty(m), np.empty(m), np.empty(m)
+    a = np.empty((m, n))
+    for k, r in enumerate(refs):
+        if isinstance(r, ReferenceJointProgramme):
+            phi[k], phi_dot[k], a[k], kappa[k] = r.evaluate(t, q, q_dot, n)
+        else:
+            phi[k], phi_dot[k], a[k], kappa[k] = r.evaluate(t, *point_state(r.frame))
+    return phi, phi_dot, a, kappa

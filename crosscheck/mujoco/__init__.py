@@ -1,0 +1,1 @@
+"""Crosscheck against MuJoCo: terms, free runs, programmed runs (exact and soft)."""

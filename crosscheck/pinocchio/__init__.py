@@ -1,0 +1,1 @@
+"""Crosscheck against Pinocchio: term by term and exactly realised programmed runs."""

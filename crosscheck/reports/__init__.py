@@ -1,0 +1,1 @@
+"""Report writing shared by every crosscheck: tables, HTML pages, the verify index."""
