@@ -1,15 +1,21 @@
-"""`gpme verify`: the paper's two simulations and every crosscheck in one command.
+"""`gpme verify [--model FILE ...]`: each model's own run and every crosscheck in one command.
 
-Writes reports/<run-id>/ (index.html, paper.csv, pinocchio.csv/.html, mujoco.csv/.html,
-summary.json, summary.csv, paper/ with the run histories and figures) and points
-reports/latest at it.  The run is built in reports/.<run-id>.partial and renamed into
-place only when complete, and `latest` is replaced atomically, so an interrupted run
-leaves the previous report whole and `latest` unchanged.  Exit status 1 when any check
-fails (or a step crashes), 0 otherwise.
+Steps: gpme (each scenario's run and its checks; without --model the paper's two crane runs
+with the paper's figures), pinocchio (term by term and exactly realised runs), mujoco
+(terms, free and programmed runs).  Writes reports/<run-id>/ (index.html, gpme.csv,
+pinocchio.csv/.html, mujoco.csv/.html, summary.json, summary.csv, models.json, runs/ or
+paper/ with the run histories and figures) and points reports/latest at it.  The run is
+built in a hidden reports/.<run-id>.*.partial directory (removed if the run is
+interrupted) and renamed into place only when complete, under a name no other run has
+taken (two runs started in the same second get <run-id> and <run-id>-2), and `latest` is
+replaced atomically, so an interrupted run leaves the previous report whole and `latest`
+unchanged.  Exit status 1 when any check fails (or a step crashes), 0 otherwise.
 """
 import json
 import os
 import shutil
+import sys
+import tempfile
 import time
 import traceback
 from pathlib import Path
@@ -20,71 +26,158 @@ from .reports.index_page import write_index
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
-STEPS = ("paper", "pinocchio", "mujoco")
-QUICK_T_END = 2.0      # s of programmed motion in --quick
+STEPS = ("gpme", "pinocchio", "mujoco")
+STEP_ALIASES = {"paper": "gpme"}
+QUICK_T_END = 2.0      # s of programmed motion in --quick (the paper step)
 FULL_T_END = 10.0
+# crane cases of the default run (no --model): n_rfe of the arm, 0 = rigid
+PINOCCHIO_CRANE = {False: (0, 1, 3, 10), True: (0, 3)}
+MUJOCO_CRANE = (0, 1)
 
 
 def _say(msg):
     print(msg, flush=True)
 
 
+def default_scenarios(step, quick):
+    """The paper's crane cases a step uses when no model file is given."""
+    from gpme_io.scenario import crane_scenario
+    if step == "pinocchio":
+        return [crane_scenario(n) for n in PINOCCHIO_CRANE[bool(quick)]]
+    if step == "mujoco":
+        return [crane_scenario(n, on_constraints=True) for n in MUJOCO_CRANE]
+    return [crane_scenario(0), crane_scenario(3)]
+
+
 def _paper_step(run_dir, quick, progress):
+    """The paper's two crane runs, with the paper's figures (default run)."""
     from gpme_examples import paper
-    from .paper_checks import paper_rows
+    from gpme_io.scenario import crane_scenario
+    from .run_checks import rows_frame, run_rows
     t_end = QUICK_T_END if quick else FULL_T_END
-    runs = {}
-    for case in ("rigid", "flexible"):
+    runs, rows = {}, []
+    for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
         _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
              f"{paper.DEFAULT_DT[case]:g} s)")
         runs[case] = paper.run_case(case, t_end=t_end, progress=progress)
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
+        rows += run_rows(crane_scenario(n), runs[case])
     paper.write_outputs(runs, run_dir / "paper")
-    df = pd.DataFrame(paper_rows(runs))
-    df["section"] = "paper"
-    write_csv(df, run_dir / "paper.csv")
+    df = rows_frame(rows)
+    write_csv(df, run_dir / "gpme.csv")
     return df, runs
 
 
-def _engine_step(name, run_dir, quick, progress):
+def _models_step(run_dir, scenarios, quick, progress):
+    """Each scenario's own gpme run: history, figures and the run checks."""
+    from gpme.runs import simulate_scenario, write_run_outputs
+    from .run_checks import rows_frame, run_rows
+    rows = []
+    for scenario in scenarios:
+        _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
+        df = simulate_scenario(scenario, quick=quick, progress=progress)
+        _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
+        write_run_outputs(scenario, df, run_dir / "runs")
+        rows += run_rows(scenario, df)
+    df = rows_frame(rows)
+    write_csv(df, run_dir / "gpme.csv")
+    return df
+
+
+def _engine_step(name, run_dir, scenarios, quick, progress):
     module = __import__(f"crosscheck.{name}.check", fromlist=["run"])
-    return module.run(run_dir, quick=quick, progress=progress)
+    return module.run(run_dir, scenarios, quick=quick, progress=progress)
 
 
 def _crash_row(step, exc):
     return pd.DataFrame([{
-        "engine": step if step != "paper" else "gpme", "model": "-", "quantity": "step crashed",
+        "engine": step, "model": "-", "quantity": "step crashed",
         "case": "-", "entry": type(exc).__name__, "gpme_value": float("nan"),
         "engine_value": float("nan"), "abs_error": float("inf"), "rel_error": float("nan"),
         "scale": float("nan"), "tol_abs": 0.0, "tol_rel": 0.0, "passed": False,
-        "reason": f"{exc}"[:500]}])
+        "status": "fail", "reason": f"{exc}"[:500]}])
 
 
-def run_verify(root, quick=False, only=None, progress=True, run_id=None):
-    """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame)."""
+def _claim_run_dir(root, run_id):
+    """(staging dir, final name): a fresh hidden staging directory and a run name no other
+    run (even one started in the same second) has taken."""
+    root.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=".partial", dir=root))
+    return staging
+
+
+def _publish(root, staging, run_id):
+    """Rename staging to root/run_id (or run_id-2, -3, ... if taken); returns the path."""
+    for k in range(1, 1000):
+        name = run_id if k == 1 else f"{run_id}-{k}"
+        final = root / name
+        try:
+            os.rename(staging, final)      # fails when final exists and is not empty
+            return final, name
+        except OSError:
+            if not final.exists():
+                raise
+    raise FileExistsError(f"no free run directory name for {run_id} in {root}")
+
+
+def _models_record(scenarios):
+    """What each scenario is made of, for models.json and the index page."""
+    out = []
+    for s in scenarios:
+        out.append({"name": s.name, "source": str(s.source) if s.source else "built in",
+                    "urdf": str(s.urdf) if s.urdf else None,
+                    "chain": list(s.chain) if s.chain else None,
+                    "frozen": dict(s.frozen), "coordinates": len(s.model.coordinate_names),
+                    "flexible_links": [f"{f.name} ({f.n_segments} segments)"
+                                       for f in s.model.flexible_links if f.n_segments],
+                    "constraints": list(s.system.constraint_names),
+                    "dependent": list(s.system.dependent or ()),
+                    "notes": list(s.notes)})
+    return out
+
+
+def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None):
+    """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
+
+    scenarios: gpme_io.scenario.Scenario list (``--model`` files); None runs the paper's
+    crane (its two runs with the paper's figures, and the default crane cases per engine).
+    """
     root = Path(root)
+    only = STEP_ALIASES.get(only, only)
     run_id = run_id or time.strftime("%Y%m%d-%H%M%S") + ("-quick" if quick else "")
-    staging = root / f".{run_id}.partial"
-    if staging.exists():
-        shutil.rmtree(staging)
-    staging.mkdir(parents=True)
+    staging = _claim_run_dir(root, run_id)
+    try:
+        return _run_steps(root, staging, run_id, quick, only, progress, scenarios)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
     start = time.perf_counter()
     tables, runs, timings = {}, None, {}
+    record = _models_record(scenarios if scenarios is not None else
+                            default_scenarios("pinocchio", quick))
+    atomic_write_text(staging / "models.json", json.dumps(record, indent=1))
     for step in STEPS:
         if only and step != only:
             continue
         _say(f"[{step}] ...")
         t0 = time.perf_counter()
         try:
-            if step == "paper":
-                tables[step], runs = _paper_step(staging, quick, progress)
+            if step == "gpme":
+                if scenarios is None:
+                    tables[step], runs = _paper_step(staging, quick, progress)
+                else:
+                    tables[step] = _models_step(staging, scenarios, quick, progress)
             else:
-                tables[step] = _engine_step(step, staging, quick, progress)
+                chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
+                tables[step] = _engine_step(step, staging, chosen, quick, progress)
         except Exception as exc:  # a crashed step is a failed check, reported in full
             traceback.print_exc()
             tables[step] = _crash_row(step, exc)
         timings[step] = time.perf_counter() - t0
-        failed = int((~tables[step]["passed"].astype(bool)).sum())
+        failed = int(_failed(tables[step]).sum())
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
     rows = pd.concat(tables.values(), ignore_index=True)
@@ -93,6 +186,9 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None):
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
     # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
     rows["section"] = rows["section"].fillna("terms")
+    if "status" not in rows.columns:
+        rows["status"] = None
+    rows["status"] = rows["status"].fillna(rows["passed"].map({True: "pass", False: "fail"}))
     summary = summarise(rows, keys=("engine", "section", "model", "quantity"))
     summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
                                 for r in summary.itertuples()])
@@ -101,21 +197,33 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None):
     write_csv(summary, staging / "summary.csv")
     atomic_write_text(staging / "summary.json", json.dumps({
         "run": meta,
-        "passed": bool(summary["passed"].all()),
+        "passed": not bool(_failed(summary).any()),
+        "models": record,
         "checks": [{"name": r["check"], "engine": r["engine"], "model": r["model"],
                     "quantity": r["quantity"], "n_compared": int(r["n_compared"]),
                     "worst_abs_error": _num(r["worst_abs_error"]),
                     "worst_rel_error": _num(r["worst_rel_error"]),
                     "tol_abs": _num(r["tol_abs"]), "tol_rel": _num(r["tol_rel"]),
-                    "status": "pass" if r["passed"] else "fail", "reason": r["reason"]}
+                    "status": _status(r), "reason": r["reason"]}
                    for r in summary.to_dict("records")]}, indent=1))
-    write_index(staging, summary, rows, runs, meta)
-    final = root / run_id
-    if final.exists():
-        shutil.rmtree(final)
-    os.rename(staging, final)
+    write_index(staging, summary, rows, runs, meta, record)
+    final, run_id = _publish(root, staging, run_id)
     _point_latest(root, run_id)
     return final, summary, rows
+
+
+def _failed(df):
+    """Boolean Series: rows (or checks) that failed."""
+    if "status" in df.columns and df["status"].notna().all():
+        return df["status"] == "fail"
+    return ~df["passed"].astype(bool)
+
+
+def _status(record):
+    status = record.get("status")
+    if isinstance(status, str):
+        return status
+    return "pass" if record["passed"] else "fail"
 
 
 def _num(v):
@@ -132,12 +240,21 @@ def _point_latest(root, run_id):
 
 
 def main(args):
+    from gpme_core.errors import GpmeError
+    scenarios = None
+    if getattr(args, "model", None):
+        from gpme.cli import load_scenarios
+        try:
+            scenarios = load_scenarios(args.model)
+        except GpmeError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
-                                     progress=not args.no_progress)
+                                     progress=not args.no_progress, scenarios=scenarios)
     cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "passed"]
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[cols].to_string(index=False))
-    n_fail = int((~summary["passed"]).sum())
+    n_fail = int(_failed(summary).sum())
     print(f"{len(summary)} checks, {n_fail} failed; report: {run_dir / 'index.html'}")
     return 1 if n_fail else 0

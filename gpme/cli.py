@@ -1,50 +1,102 @@
-"""`gpme` command line: simulate the paper's crane, crosscheck against Pinocchio/MuJoCo,
-verify everything.  Run `gpme --help`."""
+"""`gpme` command line: simulate a model, crosscheck it against Pinocchio or MuJoCo, verify
+everything, sweep parameters.  Every command takes ``--model FILE`` (a TOML model file,
+docs/models.md); without it the paper's crane is used.  Run `gpme --help`.
+
+Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on stderr).
+"""
 import argparse
 import sys
 import time
 from pathlib import Path
 
+EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
-def _simulate(args):
+
+def _error(msg):
+    print(f"error: {msg}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def load_scenarios(paths):
+    """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each)."""
+    from gpme_io.modelfile import load_model_file
+    return [load_model_file(Path(p)) for p in paths]
+
+
+def _simulate_paper(args):
+    """The paper's two crane runs with the paper's figures (no --model)."""
     from gpme_examples import paper
-    from gpme_core.errors import GpmeError
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     runs = {}
     for case in cases:
         label = case if case == "rigid" else f"flexible (n_rfe={args.n_rfe})"
-        print(f"simulating {label}, t_end = {args.t_end} s ...", flush=True)
-        try:
-            runs[case] = paper.run_case(case, n_rfe=args.n_rfe, t_end=args.t_end, dt=args.dt,
-                                        method=args.method, on_manifold=args.on_manifold,
-                                        static_arm=args.static_arm,
-                                        progress=not args.no_progress)
-        except GpmeError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
-        s = paper.summary(runs[case], transient=min(2.0, 0.5 * args.t_end))
+        print(f"simulating {label}, t_end = {args.t_end or 10.0:g} s ...", flush=True)
+        runs[case] = paper.run_case(case, n_rfe=args.n_rfe, t_end=args.t_end or 10.0, dt=args.dt,
+                                    method=args.method or "RK4", on_manifold=args.on_manifold,
+                                    static_arm=args.static_arm, progress=not args.no_progress)
+        s = paper.summary(runs[case], transient=min(2.0, 0.5 * (args.t_end or 10.0)))
         print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
               f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
               f"{s['max_abs_Phi_2_after_transient']:.2e} after the transient")
-    paths = paper.write_outputs(runs, args.out)
+    return paper.write_outputs(runs, args.out)
+
+
+def _simulate_models(args):
+    from gpme.runs import simulate_scenario, write_run_outputs
+    from crosscheck.run_checks import run_rows
+    paths = {}
+    for scenario in load_scenarios(args.model):
+        t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
+        print(f"simulating {scenario.name}: {scenario.model.n_coordinates} coordinates, "
+              f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
+        df = simulate_scenario(scenario, t_end=t_end, dt=args.dt, method=args.method,
+                               progress=not args.no_progress)
+        print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
+        for row in run_rows(scenario, df):
+            print(f"  {row['quantity']}: {row['abs_error']:.2e} ({'ok' if row['passed'] else 'FAIL'})")
+        paths.update(write_run_outputs(scenario, df, args.out))
+    return paths
+
+
+def _simulate(args):
+    from gpme_core.errors import GpmeError
+    if args.dt is not None and not args.dt > 0:
+        return _error(f"--dt must be a positive step in s, got {args.dt!r}")
+    if args.dt is not None and args.method not in (None, "RK4"):
+        return _error(f"--dt is the RK4 step; --method {args.method} chooses its own steps")
+    if args.model and (args.case != "both" or args.static_arm or args.on_manifold or
+                       args.n_rfe != 3):
+        return _error("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
+                      "crane runs; with --model the model file sets them")
+    try:
+        paths = _simulate_models(args) if args.model else _simulate_paper(args)
+    except GpmeError as exc:
+        return _error(exc)
     for p in paths.values():
         print(f"wrote {p}")
-    return 0
+    return EXIT_OK
 
 
 def _crosscheck(args):
+    from gpme_core.errors import GpmeError
+    from crosscheck.verify import default_scenarios
+    try:
+        scenarios = load_scenarios(args.model) if args.model else default_scenarios(
+            args.engine, args.quick)
+    except GpmeError as exc:
+        return _error(exc)
     if args.engine == "pinocchio":
-        from crosscheck.pinocchio import check as check
+        from crosscheck.pinocchio import check
     else:
         from crosscheck.mujoco import check
     out = Path(args.out) if args.out else Path("reports") / time.strftime(f"{args.engine}-%Y%m%d-%H%M%S")
-    df = check.run(out, quick=args.quick, progress=not args.no_progress)
-    failed = df[~df["passed"].astype(bool)]
+    df = check.run(out, scenarios, quick=args.quick, progress=not args.no_progress)
+    failed = df[df["status"] == "fail"] if "status" in df else df[~df["passed"].astype(bool)]
     print(f"{len(df)} comparisons, {len(failed)} failed; report in {out}")
     if len(failed):
         print(failed[["model", "quantity", "case", "entry", "abs_error", "rel_error"]]
               .head(20).to_string(index=False))
-    return 1 if len(failed) else 0
+    return EXIT_FAILED if len(failed) else EXIT_OK
 
 
 def _verify(args):
@@ -57,38 +109,55 @@ def _sweep(args):
     return command.main(args)
 
 
+def _model_option(parser, many=True):
+    parser.add_argument("--model", action="append", default=[], metavar="FILE",
+                        help="TOML model file (docs/models.md)" +
+                             ("; repeat for several" if many else "") +
+                             " (default: the paper's crane)")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog="gpme", description=__doc__)
+    parser = argparse.ArgumentParser(prog="gpme", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
-    sim = sub.add_parser("simulate", help="run the paper's crane and write CSV + figures")
-    sim.add_argument("--case", choices=("rigid", "flexible", "both"), default="both")
-    sim.add_argument("--n-rfe", type=int, default=3, help="RFEM segments of the flexible arm")
-    sim.add_argument("--t-end", type=float, default=10.0, help="s")
+    sim = sub.add_parser("simulate", help="run a model (default: the paper's crane) and write "
+                                          "CSV histories and figures")
+    _model_option(sim)
+    sim.add_argument("--case", choices=("rigid", "flexible", "both"), default="both",
+                     help="built-in crane only")
+    sim.add_argument("--n-rfe", type=int, default=3,
+                     help="built-in crane only: RFEM segments of the flexible arm")
+    sim.add_argument("--t-end", type=float, default=None,
+                     help="s (default: the model file's t_end; the crane: 10)")
+    sim.add_argument("--quick", action="store_true", help="the model file's quick_t_end")
     sim.add_argument("--dt", type=float, default=None,
-                     help="RK4 step in s (default: 1e-4 rigid, 5e-5 flexible)")
-    sim.add_argument("--method", choices=("RK4", "RK45", "DOP853", "Radau"), default="RK4")
+                     help="RK4 step in s (default: the model file's, else a stable step)")
+    sim.add_argument("--method", choices=("RK4", "RK45", "DOP853", "Radau"), default=None)
     sim.add_argument("--on-manifold", action="store_true",
-                     help="start on the constraints instead of the paper's off-manifold start")
+                     help="built-in crane only: start on the constraints")
     sim.add_argument("--static-arm", action="store_true",
-                     help="start the flexible arm in its gravity sag (default: straight)")
+                     help="built-in crane only: start the flexible arm in its gravity sag")
     sim.add_argument("--out", default="reports/simulate", help="output directory")
     sim.add_argument("--no-progress", action="store_true")
     sim.set_defaults(func=_simulate)
     cc = sub.add_parser("crosscheck", help="compare gpme with Pinocchio or MuJoCo")
     cc.add_argument("engine", choices=("pinocchio", "mujoco"))
+    _model_option(cc)
     cc.add_argument("--quick", action="store_true", help="CI-sized run")
     cc.add_argument("--out", default=None, help="report directory (default reports/<engine>-<time>)")
     cc.add_argument("--no-progress", action="store_true")
     cc.set_defaults(func=_crosscheck)
     ver = sub.add_parser("verify", help="the whole verification with HTML/CSV reports")
+    _model_option(ver)
     ver.add_argument("--quick", action="store_true", help="CI-sized run")
-    ver.add_argument("--only", choices=("paper", "pinocchio", "mujoco"), default=None)
+    ver.add_argument("--only", choices=("gpme", "paper", "pinocchio", "mujoco"), default=None,
+                     help="one step only ('paper' is the gpme step of the default crane)")
     ver.add_argument("--out", default="reports", help="reports root directory")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
     from gpme_study.command import add_arguments as add_sweep_arguments
-    sw = sub.add_parser("sweep", help="parameter sweep of the crane on a Dask cluster: table, "
-                                      "heat maps, safe region (docs/sweep.md)")
+    sw = sub.add_parser("sweep", help="parameter sweep on a Dask cluster: table, heat maps, "
+                                      "safe region (docs/sweep.md)")
     add_sweep_arguments(sw)
     sw.set_defaults(func=_sweep)
     return parser
@@ -96,7 +165,11 @@ def build_parser():
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ def report(tmp_path_factory):
 def test_run_directory_and_latest(report):
     root, run_dir, summary, _ = report
     assert (root / "latest").resolve() == run_dir.resolve()
-    for name in ("index.html", "summary.json", "summary.csv", "paper.csv",
+    for name in ("index.html", "summary.json", "summary.csv", "gpme.csv", "models.json",
                  "paper/rigid.csv", "paper/flexible.csv", "paper/fig2_joint_coordinates.png"):
         assert (run_dir / name).is_file(), name
     data = json.loads((run_dir / "summary.json").read_text())
@@ -35,7 +35,7 @@ def test_run_directory_and_latest(report):
     assert {"name", "engine", "model", "quantity", "worst_abs_error", "tol_abs", "tol_rel",
             "status"} <= set(data["checks"][0])
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]
-    back = pd.read_csv(run_dir / "paper.csv")
+    back = pd.read_csv(run_dir / "gpme.csv")
     assert set(back["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
                                      "energy balance"}
 
@@ -52,17 +52,30 @@ def test_interrupted_run_leaves_previous_report_and_latest(report, monkeypatch):
     assert (root / "latest").resolve() == run_dir.resolve()
     assert (run_dir / "index.html").read_bytes() == before
     assert not (root / "run-b").exists()
+    assert not list(root.glob(".run-b*")), "the staging directory of the interrupted run stays"
+
+
+def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
+    root = report[0]
+    rows = report[3]
+    # the directory logic is under test, not the runs: a step that returns the first run's rows
+    monkeypatch.setattr(verify, "_paper_step", lambda run_dir, quick, progress: (rows, None))
+    first, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
+    second, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
+    assert first != second and first.name == "same" and second.name == "same-2"
+    assert (first / "index.html").is_file() and (second / "index.html").is_file()
+    assert (root / "latest").resolve() == second.resolve()
 
 
 def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys):
     root = report[0]
 
-    def broken_step(name, run_dir, quick, progress):
+    def broken_step(name, run_dir, scenarios, quick, progress):
         raise RuntimeError(f"{name} engine unavailable")
     monkeypatch.setattr(verify, "_engine_step", broken_step)
 
     class Args:
-        out, quick, only, no_progress = str(root), True, "pinocchio", True
+        out, quick, only, no_progress, model = str(root), True, "pinocchio", True, []
     assert verify.main(Args) == 1
     assert "1 failed" in capsys.readouterr().out
 

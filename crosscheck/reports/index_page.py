@@ -11,11 +11,11 @@ PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time,
                  ("fig3_end_effector.png", "End-effector path over the target ellipse and "
                   "z_E(t) over z_a(t) (paper Fig. 3)"),
                  ("constraint_violation.png", "|Phi_1| and |Phi_2| against time (log scale)"))
-ENGINE_TITLES = {"gpme": "gpme alone: the paper's runs", "pinocchio": "Pinocchio (term by term)",
+ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
                  "mujoco": "MuJoCo (terms and full runs)"}
 WORST_ROWS = 15
 ROW_COLUMNS = ["section", "model", "quantity", "case", "entry", "gpme_value", "engine_value",
-               "abs_error", "rel_error", "tol_abs", "tol_rel", "passed", "reason"]
+               "abs_error", "rel_error", "tol_abs", "tol_rel", "status", "reason"]
 
 
 def _img(path, alt):
@@ -46,17 +46,19 @@ def _overview(summary, rows):
     for engine, g in summary.groupby("engine", sort=False):
         r = ranked[(ranked["engine"] == engine) & np.isfinite(ranked["error_over_tolerance"])]
         worst = r.iloc[0] if len(r) else None
-        out.append({"engine": engine, "checks": len(g), "failed": int((~g["passed"]).sum()),
+        status = g["status"] if "status" in g else g["passed"].map({True: "pass", False: "fail"})
+        out.append({"engine": engine, "checks": len(g), "failed": int((status == "fail").sum()),
+                    "information only": int((status == "info").sum()),
                     "comparisons": int((rows["engine"] == engine).sum()),
                     "closest to tolerance": "-" if worst is None else
                     f"{worst['section']} / {worst['model']} / {worst['quantity']}",
                     "error / tolerance": np.nan if worst is None else worst["error_over_tolerance"],
-                    "passed": not (~g["passed"]).any()})
+                    "passed": not (status == "fail").any()})
     return html_table(pd.DataFrame(out), left_columns=("engine", "closest to tolerance"))
 
 
 def _summary_table(summary):
-    cols = ["passed", "engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
+    cols = [c for c in ("status", "passed") if c in summary][:1] + ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "tol_abs", "tol_rel"]
     df = summary[cols].copy()
     table = html_table(df, left_columns=("engine", "section", "model", "quantity"))
@@ -82,15 +84,40 @@ def _benchmark_section(bench_dir):
             _img(png, "cost of one constrained q_ddot evaluation against the number of coordinates")]
 
 
-def write_index(run_dir, summary, rows, runs, meta):
-    """Write run_dir/index.html atomically."""
+def _models_section(record):
+    """What each compared model is made of: source, chain, frozen joints, flexible links,
+    constraints and what the reader left out of M, h, g."""
+    parts = ["<h2 id='models'>Models</h2>"]
+    for m in record:
+        items = [("source", m["source"]), ("URDF", m["urdf"] or "-"),
+                 ("chain (root, tip)", " -> ".join(m["chain"]) if m["chain"] else "-"),
+                 ("coordinates", m["coordinates"]),
+                 ("frozen joints", ", ".join(f"{k} = {v:g}" for k, v in m["frozen"].items())
+                  or "none"),
+                 ("flexible links", ", ".join(m["flexible_links"]) or "none"),
+                 ("constraints", ", ".join(m["constraints"]) or "none"),
+                 ("dependent coordinates", ", ".join(m["dependent"]) or "-")]
+        cells = "".join(f"<tr><th class='l'>{html.escape(k)}</th><td class='l'>"
+                        f"{html.escape(str(v))}</td></tr>" for k, v in items)
+        notes = "".join(f"<li>{html.escape(n)}</li>" for n in m["notes"])
+        parts.append(f"<h3>{html.escape(m['name'])}</h3><table class='meta'>{cells}</table>"
+                     + (f"<p>Accepted from the model description but left out of M, h, g, or "
+                        f"replaced:</p><ul>{notes}</ul>" if notes else ""))
+    return parts
+
+
+def write_index(run_dir, summary, rows, runs, meta, models=()):
+    """Write run_dir/index.html atomically; ``models`` is verify's models.json record."""
     run_dir = Path(run_dir)
-    ok = bool(summary["passed"].all())
-    n_fail = int((~summary["passed"]).sum())
+    failed = summary["status"] == "fail" if "status" in summary else ~summary["passed"]
+    ok = not bool(failed.any())
+    n_fail = int(failed.sum())
+    n_info = int((summary["status"] == "info").sum()) if "status" in summary else 0
     parts = [f"<h1>gpme verification report</h1>",
              f"<p class='banner {'ok' if ok else 'bad'}'><strong>"
-             f"{'ALL CHECKS PASSED' if ok else f'{n_fail} CHECK(S) FAILED'}</strong> — "
-             f"{len(summary)} checks, {len(rows)} comparisons.</p>",
+             f"{'NO CHECK FAILED' if ok else f'{n_fail} CHECK(S) FAILED'}</strong> — "
+             f"{len(summary)} checks ({n_info} information only, not gated), "
+             f"{len(rows)} comparisons.</p>",
              _meta_table(meta),
              "<h2 id='overview'>At a glance</h2>",
              _overview(summary, rows),
@@ -99,6 +126,11 @@ def write_index(run_dir, summary, rows, runs, meta):
              "difference is at most tol_abs + tol_rel × max|engine value|. rel_error is that "
              "difference over max|engine value|. Column definitions: reports/README.md.</p>",
              _summary_table(summary)]
+    parts += _models_section(models)
+    run_figs = sorted((run_dir / "runs").glob("*.png")) if (run_dir / "runs").exists() else []
+    if run_figs:
+        parts.append("<h2 id='runs'>Runs</h2><p>Histories: runs/&lt;model&gt;.csv.</p>")
+        parts += [_img(p, p.stem.replace("_", " ")) for p in run_figs]
     paper_dir = run_dir / "paper"
     if paper_dir.exists():
         parts.append("<h2 id='paper'>The paper's simulations</h2>")
@@ -112,7 +144,7 @@ def write_index(run_dir, summary, rows, runs, meta):
         sub = rows[rows["engine"] == engine]
         parts.append(f"<h2 id='engine-{engine}'>{html.escape(ENGINE_TITLES.get(engine, engine))}</h2>")
         links = [f"<a href='{f}'>{f}</a>" for f in (f"{engine}.html", f"{engine}.csv",
-                                                      "paper.csv" if engine == "gpme" else "")
+                                                      "gpme.csv" if engine == "gpme" else "")
                  if f and (run_dir / f).exists()]
         if links:
             parts.append(f"<p>Full results: {', '.join(links)}.</p>")

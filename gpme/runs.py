@@ -1,0 +1,59 @@
+"""Run a scenario with gpme and write its history and figures (used by `gpme simulate` and
+the gpme step of `gpme verify`)."""
+import re
+from pathlib import Path
+
+from gpme_core.atomic import atomic_save_figure, atomic_write_csv
+from gpme_core.errors import ModelError
+from gpme_core.integrate import METHODS, simulate, suggest_rk4_step
+
+from . import figures
+
+
+def resolved_step(scenario, dt=None):
+    """s, the RK4 step of a run: ``dt`` if given, else the scenario's, else
+    suggest_rk4_step at the scenario's initial state (stable for its stiffest mode)."""
+    step = dt if dt is not None else scenario.dt
+    if step is None:
+        step = suggest_rk4_step(scenario.model, scenario.q0)
+    if not (step > 0 and step < float("inf")):
+        raise ModelError(f"RK4 step must be positive and finite (s), got {step!r}")
+    return float(step)
+
+
+def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
+                      output_dt=None):
+    """History DataFrame of ``scenario`` from its initial state.
+
+    t_end  : s, default scenario.t_run(quick)
+    dt     : s, RK4 step, default :func:`resolved_step`
+    method : one of gpme_core.integrate.METHODS, default the scenario's integrator
+    """
+    method = method or scenario.integrator
+    if method not in METHODS:
+        raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
+    t_end = scenario.t_run(quick) if t_end is None else float(t_end)
+    out_dt = output_dt or scenario.output_dt
+    kwargs = {"dt": resolved_step(scenario, dt)} if method == "RK4" else {}
+    df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
+                  output_dt=out_dt, progress=progress, **kwargs)
+    df.attrs["scenario"] = scenario.name
+    return df
+
+
+def slug(name):
+    """A file-name-safe form of a scenario name."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "model"
+
+
+def write_run_outputs(scenario, df, out_dir):
+    """<out_dir>/<name>.csv and <name>_<figure>.png for one run; returns {label: path}."""
+    out = Path(out_dir)
+    stem = slug(scenario.name)
+    paths = {f"{stem}.csv": out / f"{stem}.csv"}
+    atomic_write_csv(df, paths[f"{stem}.csv"])
+    for name, make in figures.FIGURES.items():
+        path = out / f"{stem}_{name}"
+        atomic_save_figure(make(scenario, df), path)
+        paths[path.name] = path
+    return paths
