@@ -67,6 +67,8 @@ def run_rows(scenario, df, tolerances=None):
             rows.append(compare("gpme", label, f"|{name}| after transient", case,
                                 late[name].loc[worst], 0.0, tol)
                         | {"entry": f"t = {df['t'].loc[worst]:.4f} s (transient {t_tr:.3g} s)"})
+    if names:
+        rows.append(_jacobian_row(scenario, df, case))
     # the largest work term, or the largest energy change when no work is done
     energy = df["E_kin"] + df["E_pot"]
     scale = max(float(df[["W_drive", "W_reaction", "W_dissipated"]].abs().max().max()),
@@ -80,6 +82,32 @@ def run_rows(scenario, df, tolerances=None):
                rel_error=abs(err) / scale if scale > 0 else np.nan)
     rows.append(row)
     return rows
+
+
+def smallest_singular_values(scenario, df, samples=200):
+    """(t (k,), sigma_min (k,)): smallest singular value of the constraint Jacobian A (m, n)
+    at up to ``samples`` recorded states of the run (units of A: 1/rad, m/rad, ...).  Its
+    approach to zero means the task drives the mechanism towards a singular pose."""
+    names = list(scenario.model.coordinate_names)
+    step = max(1, len(df) // samples)
+    ts, sig = [], []
+    for _, r in df.iloc[::step].iterrows():
+        q = r[names].to_numpy(float)
+        q_dot = r[[f"{n}_dot" for n in names]].to_numpy(float)
+        _, _, a, _ = scenario.system.constraints(float(r["t"]), q, q_dot)
+        ts.append(float(r["t"]))
+        sig.append(float(np.linalg.svd(a, compute_uv=False).min()))
+    return np.array(ts), np.array(sig)
+
+
+def _jacobian_row(scenario, df, case):
+    ts, sig = smallest_singular_values(scenario, df)
+    k = int(np.argmin(sig))
+    row = compare("gpme", scenario.name, "smallest singular value of the constraint Jacobian",
+                  case, sig[k], sig[k], Tolerance(np.inf, 0.0, "information: distance from a "
+                  "singular pose along the run (min over the run; 0 = singular)"))
+    row.update(entry=f"t = {ts[k]:.4f} s")
+    return row
 
 
 def rows_frame(rows):
