@@ -16,6 +16,10 @@ import numpy as np
 
 from .errors import ModelError
 
+# Relative tolerance of the inertia checks: the eigenvalues of I_C from eigvalsh and from a
+# rotation R I R^T (an <inertial rpy>, a frame change) carry round-off of a few eps * max|I|;
+# 1e-12 * max|I| is far above that (~1e-15) and far below any physical principal moment
+# worth keeping (a real body thinner than 1e-6 of its size in two directions).
 _INERTIA_TOL = 1e-12
 
 
@@ -23,10 +27,16 @@ _INERTIA_TOL = 1e-12
 class RigidBodyInertia:
     """Mass properties of one rigid body.
 
-    mass    : kg, > 0
+    mass    : kg, >= 0 (0 with a zero tensor is no body at all; 0 with a non-zero tensor
+              is a pure rotational inertia, e.g. a rotor whose mass is counted elsewhere)
     com     : (3,) m, centre of mass in the body frame
     inertia : (3, 3) kg m^2, about the centre of mass, body axes; symmetric positive
-              definite and satisfying the triangle inequalities of a real body.
+              semi-definite (zero for a point mass, one zero moment for a thin rod) and
+              satisfying the triangle inequalities I1 + I2 >= I3 of a real body.
+
+    Whether a chain of such bodies can move is the mass matrix's business: a point mass on
+    the axis of its own revolute joint gives a singular M, which gpme_core.model's
+    validation reports naming the coordinates.
     """
 
     mass: float
@@ -52,8 +62,9 @@ class RigidBodyInertia:
         """List of human-readable problems with this inertia (empty when valid)."""
         out = []
         m = self.mass
-        if not np.isfinite(m) or m <= 0.0:
-            out.append(f"{label}: mass must be positive and finite, got {m!r} kg")
+        if not np.isfinite(m) or m < 0.0:
+            out.append(f"{label}: mass must be positive and finite, got {m!r} kg (or exactly "
+                       "0 kg for a massless body)")
         c = np.array(self.com)
         if c.shape != (3,) or not np.all(np.isfinite(c)):
             out.append(f"{label}: centre of mass must be 3 finite numbers in m, got {self.com!r}")
@@ -65,11 +76,12 @@ class RigidBodyInertia:
             out.append(f"{label}: inertia tensor must be symmetric, got {inertia.tolist()}")
             return out
         eig = np.linalg.eigvalsh(inertia)
-        scale = max(abs(eig).max(), 1e-300)
-        if eig.min() <= _INERTIA_TOL * scale or eig.min() <= 0.0:
-            out.append(f"{label}: inertia tensor must be positive definite, "
-                       f"got principal moments {eig.tolist()} kg m^2")
-        elif (eig[0] + eig[1] < eig[2] * (1 - 1e-9)):
+        tol = _INERTIA_TOL * abs(eig).max()
+        if eig.min() < -tol:
+            out.append(f"{label}: inertia tensor must be positive definite or semi-definite "
+                       f"(no negative principal moment), got principal moments {eig.tolist()} "
+                       "kg m^2")
+        elif eig[0] + eig[1] < eig[2] - tol:
             out.append(f"{label}: principal moments {eig.tolist()} kg m^2 violate the triangle "
                        "inequality I1 + I2 >= I3 of a physical body")
         return out
@@ -92,10 +104,16 @@ def pseudo_inertia(mass, com, inertia_about_com):
 
 
 def inertia_from_pseudo(h):
-    """Inverse of :func:`pseudo_inertia`: returns (mass, com (3,), I_C (3, 3))."""
+    """Inverse of :func:`pseudo_inertia`: returns (mass, com (3,), I_C (3, 3)).
+
+    A massless H (H[3, 3] == 0) returns com = 0 and the rotational inertia its 3x3 block
+    holds (zero for no body at all).
+    """
     mass = h[3, 3]
     if mass <= 0.0:
-        return 0.0, np.zeros(3), np.zeros((3, 3))
+        j = h[:3, :3]
+        i_c = np.trace(j) * np.eye(3) - j
+        return 0.0, np.zeros(3), 0.5 * (i_c + i_c.T)
     c = h[:3, 3] / mass
     j_c = h[:3, :3] - mass * np.outer(c, c)
     i_c = np.trace(j_c) * np.eye(3) - j_c
@@ -126,7 +144,8 @@ def cylinder(mass, radius, length, axis=2, com=(0.0, 0.0, 0.0), inner_radius=0.0
 
 
 def check_pseudo_inertia(h, label="H"):
-    """Raise ModelError unless h is a (4, 4) symmetric positive-definite pseudo-inertia."""
+    """Raise ModelError unless h is a (4, 4) pseudo-inertia of a physical body (mass >= 0,
+    I_C positive semi-definite with the triangle inequalities)."""
     h = np.asarray(h, dtype=float)
     if h.shape != (4, 4):
         raise ModelError(f"{label}: expected shape (4, 4), got {h.shape}")

@@ -267,13 +267,27 @@ def _mass_matrix_problems(model):
     from .dynamics import mass_matrix  # local import: dynamics imports model
     q = model.spring_reference.copy()
     m = mass_matrix(model, q)
-    eig = np.linalg.eigvalsh(m)
-    if eig.min() > 1e-12 * max(eig.max(), 1e-300):
+    eig, vec = np.linalg.eigh(m)
+    # Round-off in M is a few eps * max|M|; an eigenvalue below 1e-12 * the largest one
+    # (cond(M) > 1e12) leaves no correct digit in an acceleration of 4 significant ones.
+    tol = 1e-12 * max(eig.max(), 1e-300)
+    if eig.min() > tol:
         return []
-    zero = [model.coordinate_names[k] for k in range(model.n_coordinates) if m[k, k] <= 1e-300]
+    names = model.coordinate_names
+    modes = []
+    for k in np.flatnonzero(eig <= tol):
+        v = vec[:, k] / vec[np.argmax(np.abs(vec[:, k])), k]    # largest component = 1
+        big = np.flatnonzero(np.abs(v) > 1e-6)
+        modes.append(names[big[0]] if len(big) == 1 else
+                     " ".join(f"{v[i]:+.3g} {names[i]}" for i in big))
+    zero = [names[k] for k in range(model.n_coordinates) if m[k, k] <= 1e-300]
     hint = f"; coordinates moving no mass: {zero}" if zero else ""
-    return [f"the mass matrix at q = spring references is not positive definite "
-            f"(smallest eigenvalue {eig.min():.3e}){hint}; give the links they move a mass"]
+    return [f"the mass matrix at q = spring references is not positive definite (smallest "
+            f"eigenvalue "
+            f"{eig.min():.3e}, largest {eig.max():.3e}): no mass or inertia resists a motion "
+            f"of {'; of '.join(modes)}{hint}; give the links moved by these coordinates mass "
+            "or rotational inertia about their joint axes (a point mass on a revolute axis "
+            "has none)"]
 
 
 class ChainBuilder:
@@ -340,12 +354,22 @@ class ChainBuilder:
         """A force/torque t(t) on coordinate ``joint``."""
         self._drives.append(Drive(joint, function))
 
-    def add_beam(self, name, beam, n_segments):
-        """Attach an RFEM-discretised beam along +x of the current link (see gpme_core.rfem)."""
+    def add_beam(self, name, beam, n_segments, frame=None):
+        """Attach an RFEM-discretised beam to the current link (see gpme_core.rfem).
+
+        frame : (4, 4) beam frame B in the current link frame: the beam starts at B's
+                origin and lies along B's +x, its section axes are B's y and z; None =
+                identity (the beam along +x of the link frame).  What is added next
+                attaches at the beam tip, B @ translation(L) at zero deflection.
+        """
         from .rfem import discretise_beam
-        discretise_beam(self, name, beam, n_segments)
+        discretise_beam(self, name, beam, n_segments, frame=frame)
 
     # used by rfem
+    def _pending_origin_transform(self):
+        """(4, 4) current link frame -> where the next joint, body or frame attaches."""
+        return self._pending_origin.copy()
+
     def _set_pending_origin(self, t):
         self._pending_origin = np.asarray(t, dtype=float)
 
@@ -358,7 +382,7 @@ class ChainBuilder:
         """Validate and return the immutable :class:`Model`."""
         links = []
         for name, h, parts in zip(self._link_names, self._link_h, self._link_parts):
-            if h is None or h[3, 3] == 0.0:
+            if h is None or not np.any(h):
                 links.append(Link(name, None))
             elif len(parts) == 1 and parts[0] is not None:
                 links.append(Link(name, parts[0]))     # keep the user's numbers bit-exact

@@ -1,4 +1,5 @@
-"""URDF writer/reader (gpme_io/urdf.py) and the committed files in models/urdf/."""
+"""URDF writer and reader (gpme_io/urdf_writer.py, urdf_reader.py, side_file.py, re-exported
+by gpme_io/urdf.py) and the committed files in models/urdf/."""
 import shutil
 import subprocess
 import textwrap
@@ -8,8 +9,8 @@ import pinocchio as pin
 import pytest
 
 from crosscheck import generate_models
-from gpme_io.urdf import (MUJOCO_BOUND, UNLIMITED, load_side_file, read_urdf,
-                             side_file_path, write_urdf)
+from gpme_io.urdf import (MUJOCO_BOUND, UNLIMITED, load_side_file, load_urdf, read_urdf,
+                          side_file_path, write_urdf)
 from gpme_examples.crane import CraneParameters, build_crane
 from gpme_core.dynamics import gravity_forces, mass_matrix, velocity_product_terms
 from gpme_core.errors import ModelFileError
@@ -248,10 +249,10 @@ BAD = """<?xml version="1.0"?>
   <joint name="free" type="floating"><parent link="world"/><child link="a"/></joint>
   <link name="a"><inertial><mass value="1"/>
     <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
-  <joint name="slide" type="planar"><parent link="a"/><child link="b"/></joint>
+  <joint name="slide" type="screw"><parent link="a"/><child link="b"/></joint>
   <link name="b"/>
   <joint name="copy" type="revolute"><parent link="a"/><child link="c"/>
-    <axis xyz="0 0 0"/><mimic joint="free"/><dynamics friction="0.2"/>
+    <axis xyz="0 0 0"/><limit lower="1" upper="-1"/>
     <origin xyz="1 two 3"/></joint>
   <link name="c"><inertial><mass value="-1"/>
     <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
@@ -261,20 +262,21 @@ BAD = """<?xml version="1.0"?>
 """
 
 
-def test_every_unsupported_element_is_named_in_one_error(tmp_path):
+def test_every_malformed_element_is_named_in_one_error(tmp_path):
     with pytest.raises(ModelFileError) as exc:
         read_urdf(_write(tmp_path, BAD))
     msg = str(exc.value)
-    for expected in ("joint 'free': type 'floating' is not supported",
-                     "joint 'slide': type 'planar' is not supported",
-                     "joint 'copy': <mimic> is not supported",
-                     "joint 'copy': <dynamics friction=0.2> is not supported",
+    for expected in ("joint 'slide': unknown type 'screw'; URDF types: revolute, continuous, "
+                     "prismatic, fixed, floating, planar",
+                     "joint 'copy': <limit lower=1.0 upper=-1.0> must have lower <= upper",
                      "joint 'copy': <axis xyz> must not be zero",
                      "joint 'copy' <origin xyz>: expected 3 finite numbers, got '1 two 3'",
-                     "link 'c' <inertial>: mass must be positive",
-                     "joint 'lost': parent link 'nowhere' is not a <link> of the file"):
+                     "link 'c' <inertial>: mass must be positive and finite, got -1.0 kg",
+                     "joint 'lost': parent link 'nowhere' is not a <link> of the file",
+                     "exactly one root link (a link that is no joint's child), found "
+                     "['world', 'b', 'd']"):
         assert expected in msg
-    assert len(exc.value.problems) == 8
+    assert len(exc.value.problems) == 7
     assert str(tmp_path / "robot.urdf") in exc.value.problems[0]
 
 
@@ -287,18 +289,23 @@ def _chain_with(extra):
             + extra + "</robot>")
 
 
-def test_branch_with_two_moving_joints_is_named(tmp_path):
+def test_branches_of_moving_joints_need_a_chain_choice(tmp_path):
     extra = "".join(f"""<joint name="{j}" type="prismatic"><parent link="a"/><child link="{c}"/>
         <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
         <link name="{c}"><inertial><mass value="1"/>
         <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>"""
                     for j, c in (("left", "l"), ("right", "r")))
-    with pytest.raises(ModelFileError, match=r"link 'a' .* branches into moving joints "
-                                             r"\['left', 'right'\]"):
-        read_urdf(_write(tmp_path, _chain_with(extra)))
+    path = _write(tmp_path, _chain_with(extra))
+    with pytest.raises(ModelFileError, match=r"the moving joints below link 'world' lie on 2 "
+                                             r"branches ending at links \['l', 'r'\]: choose "
+                                             r"one with chain=\('world', <tip link>\)"):
+        read_urdf(path)
+    model = read_urdf(path, chain=("world", "r"))
+    assert model.coordinate_names == ("j1", "right") and "l" in model.frames
 
 
-def test_moving_link_without_inertial_is_an_error_unless_declared(tmp_path):
+def test_moving_link_without_inertial_is_accepted_and_noted_unless_declared(tmp_path):
+    """A massless chain link is fine when M stays positive definite (here j2 moves b)."""
     extra = """<joint name="j2" type="revolute"><parent link="a"/><child link="hollow"/>
         <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
         <link name="hollow"/>
@@ -307,10 +314,12 @@ def test_moving_link_without_inertial_is_an_error_unless_declared(tmp_path):
         <link name="b"><inertial><origin xyz="0.5 0 0"/><mass value="1"/>
         <inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>"""
     path = _write(tmp_path, _chain_with(extra))
-    with pytest.raises(ModelFileError, match=r"link 'hollow' \(moved by joint 'j2'\) has no "
-                                             r"<inertial>"):
-        read_urdf(path)
-    assert read_urdf(path, massless_links=["hollow"]).links[1].inertia is None
+    res = load_urdf(path)
+    assert res.model.links[1].inertia is None
+    assert "chain links without mass (accepted: the mass matrix is checked positive " \
+           "definite): hollow" in res.notes
+    res = load_urdf(path, massless_links=["hollow"])
+    assert not any("without mass" in n for n in res.notes)
 
 
 def test_malformed_xml_and_side_file(tmp_path):
@@ -336,7 +345,9 @@ def test_flexible_request_problems(tmp_path):
     msg = str(exc.value)
     assert "flexible link 'arm': already RFEM-discretised with 1 segments" in msg
     assert "flexible link 'E': not a link moved by a joint" in msg
-    assert "flexible link 'slider': expected (BeamProperties, n_segments)" in msg
+    assert "flexible link 'slider': expected a FlexibleLink or (BeamProperties, " \
+           "n_segments), got 'beam'" in msg
+    assert len(exc.value.problems) == 3
 
 
 def test_writer_rejects_name_clash_and_unstorable_drive(tmp_path):

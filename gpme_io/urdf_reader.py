@@ -1,0 +1,935 @@
+"""Read a URDF (any tree, through a chosen chain) into a gpme Model.
+
+:func:`load_urdf` reads the descriptions people have: trees with grippers and sensors,
+extension tags, friction and actuator limits.  What it does, in order (docs/urdf.md):
+
+* **Chain.**  ``chain=(root, tip)``: the revolute, continuous (both -> gpme revolute)
+  and prismatic joints on the path from link ``root`` to link ``tip`` are the gpme
+  coordinates, in path order.  ``root`` defaults to the URDF's root link; ``tip`` may be
+  omitted when the moving joints below ``root`` lie on one path.  gpme's world frame is
+  the URDF root link's frame: everything fixed to it (links above ``root``, branches that
+  do not move) is dropped, and the pose of ``root`` goes into the first joint's origin.
+* **Frozen joints.**  Every other moving joint is frozen at ``frozen[name]`` (rad or m,
+  default 0.0): it becomes a fixed joint with origin @ motion(value).  A mimic joint off
+  the chain without a value follows the joint it mimics: multiplier * value + offset.
+  Joints above ``root`` must be frozen explicitly (they would move the whole chain).
+* **Merging.**  Every link hanging on a chain link through fixed or frozen joints adds its
+  inertia to that chain link and becomes a named frame of the model.
+* **Flexible links.**  ``flexible={link: FlexibleLink(...)}`` replaces the link's
+  <inertial> by an RFEM beam (gpme_core.rfem); see :class:`FlexibleLink` for the beam's
+  axis, length and section frame.  ``{link: (BeamProperties, n)}`` (beam along +x) still
+  works.
+* **Ignored, and said so.**  <dynamics friction>, effort and velocity limits,
+  <safety_controller>, <calibration>, <transmission>, <gazebo>, <mujoco> and other
+  extension tags, <mimic> on fixed joints, <visual> and <collision>, inertials on links
+  that do not move: each class is named once in :attr:`UrdfReadResult.notes`.  A <limit>
+  with lower == upper (URDF's default 0 = 0 when a <limit> gives only effort and
+  velocity) is read as no range (unlimited) and noted.
+
+Every problem, from every stage (XML, side file, inertials, joints, chain, frozen values,
+flexible specs, the built model), comes in one :class:`gpme_core.errors.ModelFileError`.
+"""
+import dataclasses
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Mapping, Optional, Sequence, Union
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gpme_core import time_functions
+from gpme_core import transforms as tf
+from gpme_core.errors import ModelError, ModelFileError
+from gpme_core.inertia import RigidBodyInertia
+from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder,
+                             FlexibleLinkInfo, Model, validate_model)
+from gpme_core.rfem import BeamProperties, BeamSection
+
+from .side_file import read_side_file, side_file_path, side_file_problems
+from .urdf_writer import UNLIMITED
+
+_MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
+_UNSUPPORTED = {"floating": "6-dof floating joint", "planar": "planar joint"}
+_KNOWN_TYPES = tuple(_MOVING) + ("fixed",) + tuple(_UNSUPPORTED)
+_ROBOT_CHILDREN = ("link", "joint", "material")
+_LINK_CHILDREN = ("inertial", "visual", "collision")
+_JOINT_CHILDREN = ("origin", "parent", "child", "axis", "limit", "dynamics", "mimic",
+                   "safety_controller", "calibration")
+# |axis| - 1 accepted for a FlexibleLink axis given as a unit vector (round-off of a
+# normalised vector written in decimal is ~1e-16; 1e-9 allows 9-digit text).
+_UNIT_TOL = 1e-9
+# Below this norm (of a unit vector's component) the default section y axis is taken as
+# parallel to the beam and the link z axis is used instead.
+_PARALLEL_TOL = 1e-6
+
+
+# ============================================================================ public types
+@dataclass(frozen=True)
+class FlexibleLink:
+    """How to make one URDF link an RFEM beam on reading.
+
+    section           : gpme_core.rfem.BeamSection (area, I_y, I_z, J in the beam frame)
+    youngs_modulus    : E, Pa
+    shear_modulus     : G, Pa
+    density           : rho, kg/m^3
+    n_segments        : RFEM segments, int >= 0 (0 = one rigid body with the beam's mass)
+    bending_viscosity : eta_E, Pa s (Kelvin-Voigt), default 0
+    torsion_viscosity : eta_G, Pa s; None = eta_E G / E
+    axis              : (3,) unit vector, link frame; None = towards the next chain joint
+    length            : m; None = the next chain joint's distance along ``axis``
+    section_y_axis    : (3,) link frame, the direction of the section's y axis (projected
+                        orthogonal to the beam); None = the link y axis, or the link z axis
+                        when y is parallel to the beam
+
+    The rule: the beam starts at the link frame origin.  Its axis and length are the
+    vector p from the link origin to the origin of the next chain joint's frame (in the
+    link frame, through any fixed joints in between): axis = p / |p|, length = p . axis,
+    unless ``axis`` / ``length`` are given; the chain's tip link has no next joint, so both
+    must be given.  The beam frame B has x along the axis, y the normalised component of
+    ``section_y_axis`` orthogonal to x, z = x cross y.  The link's <inertial> is replaced
+    by the beam's RFEM masses; links fixed to it keep theirs.  Everything hanging on the
+    link (the next joint, fixed links, frames) moves to the beam tip with its transform T
+    from the link frame replaced by inv(B @ translation(L)) @ T, so that at zero
+    deflection the rigid geometry is unchanged.
+    """
+
+    section: BeamSection
+    youngs_modulus: float
+    shear_modulus: float
+    density: float
+    n_segments: int
+    bending_viscosity: float = 0.0
+    torsion_viscosity: Optional[float] = None
+    axis: Optional[tuple] = None
+    length: Optional[float] = None
+    section_y_axis: Optional[tuple] = None
+
+    def __post_init__(self):
+        for fld in ("axis", "section_y_axis"):
+            v = getattr(self, fld)
+            if v is not None and not isinstance(v, (str, bytes)) and np.ndim(v) == 1:
+                object.__setattr__(self, fld, tuple(np.asarray(v).tolist()))
+
+
+@dataclass(frozen=True)
+class UrdfReadResult:
+    """What :func:`load_urdf` made of a URDF.
+
+    model        : the validated gpme Model
+    notes        : what was ignored or changed, one line per class of element (friction,
+                   limits, extension tags, replaced inertias, merged branches, ...)
+    frozen       : {URDF joint name: value (rad or m)} of every joint frozen off the chain
+    chain        : (root link, tip link) actually used
+    chain_joints : the URDF joints that are the model's coordinates, in order (before any
+                   RFEM coordinates are inserted; the model's coordinate_names has those)
+    frames       : the model's named frames (every link merged into a chain link)
+    """
+
+    model: Model
+    notes: tuple
+    frozen: Mapping[str, float]
+    chain: tuple
+    chain_joints: tuple
+    frames: tuple
+
+
+FlexibleSpec = Union[FlexibleLink, tuple]
+
+
+# ============================================================================ parsing
+@dataclass
+class _Joint:
+    name: str
+    type: str                 # URDF type
+    parent: Optional[str]
+    child: Optional[str]
+    origin: NDArray[np.float64]
+    axis: NDArray[np.float64]
+    damping: float
+    limits: tuple             # (lower, upper) rad or m, inf = none
+    limit_raw: Optional[tuple]
+    mimic: Optional[tuple]    # (joint, multiplier, offset)
+
+    @property
+    def moving(self) -> bool:
+        return self.type != "fixed"
+
+    def motion(self, value: float) -> NDArray[np.float64]:
+        """(4, 4) joint frame -> child frame at coordinate ``value``."""
+        if self.type in ("revolute", "continuous"):
+            return tf.revolute_motion(self.axis, value)
+        if self.type == "prismatic":
+            return tf.prismatic_motion(self.axis, value)
+        return np.eye(4)
+
+
+class _Notes:
+    """Names per class of ignored element, formatted once at the end."""
+
+    def __init__(self):
+        self._names = {}
+        self._free = []
+
+    def add(self, key: str, name: str) -> None:
+        names = self._names.setdefault(key, [])
+        if name not in names:
+            names.append(name)
+
+    def line(self, text: str) -> None:
+        self._free.append(text)
+
+    def lines(self) -> tuple:
+        out = []
+        for key, names in self._names.items():
+            what, why = _NOTE_TEXT[key]
+            out.append(f"{what} on {len(names)} {_plural(key, len(names))} ignored ({why}): "
+                       + ", ".join(names))
+        return tuple(out + self._free)
+
+
+_NOTE_TEXT = {
+    "friction": ("<dynamics friction>", "gpme has no Coulomb friction"),
+    "effort": ("effort/velocity <limit>", "gpme has no actuator limits"),
+    "safety": ("<safety_controller>", "controller settings, not dynamics"),
+    "calibration": ("<calibration>", "encoder reference, not dynamics"),
+    "mimic_fixed": ("<mimic>", "a fixed joint does not move"),
+    "visual": ("<visual>/<collision>", "geometry; gpme needs only mass properties"),
+    "tags": ("extension tags", "not URDF dynamics"),
+}
+
+
+def _plural(key: str, n: int) -> str:
+    if key in ("visual",):
+        return "link" if n == 1 else "links"
+    if key == "tags":
+        return "element kind" if n == 1 else "element kinds"
+    return "joint" if n == 1 else "joints"
+
+
+def _floats(text, count, label, problems, default):
+    if text is None:
+        return np.array(default, dtype=float)
+    try:
+        v = np.array([float(s) for s in text.split()], dtype=float)
+    except ValueError:
+        v = None
+    if v is None or v.shape != (count,) or not np.all(np.isfinite(v)):
+        problems.append(f"{label}: expected {count} finite numbers, got {text!r}")
+        return np.array(default, dtype=float)
+    return v
+
+
+def _origin_transform(el, label, problems):
+    """(4, 4) parent -> child transform of an element's <origin> (identity if absent)."""
+    o = el.find("origin")
+    if o is None:
+        return np.eye(4)
+    xyz = _floats(o.get("xyz"), 3, f"{label} <origin xyz>", problems, (0, 0, 0))
+    rpy = _floats(o.get("rpy"), 3, f"{label} <origin rpy>", problems, (0, 0, 0))
+    return tf.homogeneous(tf.rpy_to_rotation(*rpy), xyz)
+
+
+def _read_inertial(link_el, problems):
+    """RigidBodyInertia of a <link> in the link frame, or None (no inertial, zero mass and
+    zero tensor, or invalid: the problem is appended)."""
+    name = link_el.get("name")
+    el = link_el.find("inertial")
+    if el is None:
+        return None
+    label = f"link {name!r} <inertial>"
+    t = _origin_transform(el, label, problems)
+    mass_el, inertia_el = el.find("mass"), el.find("inertia")
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    bad = []
+    if mass_el is None:
+        bad.append(f"{label}: missing <mass value=...>")
+    if inertia_el is None:
+        bad.append(f"{label}: missing <inertia {' '.join(keys)}>")
+    if bad:
+        problems.extend(bad)
+        return None
+    n_before = len(problems)
+    mass = float(_floats(mass_el.get("value"), 1, f"{label} <mass value>", problems,
+                         (np.nan,))[0])
+    vals = [_floats(inertia_el.get(k, "0"), 1, f"{label} <inertia {k}>", problems, (np.nan,))[0]
+            for k in keys]
+    if len(problems) > n_before:
+        return None
+    ixx, ixy, ixz, iyy, iyz, izz = vals
+    i_com = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    r = t[:3, :3]
+    inertia = RigidBodyInertia(mass, t[:3, 3], r @ i_com @ r.T)
+    bad = inertia.problems(label)
+    if bad:
+        # the tensor as written, not rotated, is what the user can find in the file
+        problems.extend(b.replace(str(np.linalg.eigvalsh(r @ i_com @ r.T).tolist()),
+                                  str(np.linalg.eigvalsh(i_com).tolist())) for b in bad)
+        return None
+    if mass == 0.0 and not np.any(i_com):
+        return None                   # the usual way of writing "no mass"
+    return inertia
+
+
+def _read_limits(el, jtype, label, problems, notes):
+    """(lower, upper) rad or m of a <limit> and whether lower == upper was read as none."""
+    lim = el.find("limit")
+    if lim is None:
+        return (-np.inf, np.inf), None
+    for key in ("effort", "velocity"):
+        v = lim.get(key)
+        if v is not None:
+            x = _floats(v, 1, f"{label} <limit {key}>", problems, (np.inf,))[0]
+            if abs(x) < UNLIMITED:
+                notes.add("effort", el.get("name"))
+    if jtype == "continuous":
+        return (-np.inf, np.inf), None
+    # URDF: lower and upper default to 0
+    lo = float(_floats(lim.get("lower"), 1, f"{label} <limit lower>", problems, (0.0,))[0])
+    hi = float(_floats(lim.get("upper"), 1, f"{label} <limit upper>", problems, (0.0,))[0])
+    if lo > hi:
+        problems.append(f"{label}: <limit lower={lo!r} upper={hi!r}> must have lower <= upper "
+                        "(lower == upper is read as no range)")
+        return (-np.inf, np.inf), (lo, hi)
+    if lo == hi:
+        return (-np.inf, np.inf), (lo, hi)
+    return (-np.inf if lo <= -UNLIMITED else lo, np.inf if hi >= UNLIMITED else hi), (lo, hi)
+
+
+def _read_joint(el, link_names, problems, notes):
+    name = el.get("name")
+    if not name:
+        problems.append("a <joint> without a name attribute")
+        return None
+    label = f"joint {name!r}"
+    jtype = el.get("type")
+    if jtype not in _KNOWN_TYPES:
+        problems.append(f"{label}: unknown type {jtype!r}; URDF types: "
+                        f"{', '.join(_KNOWN_TYPES)}")
+        return None
+    ends = {}
+    for end in ("parent", "child"):
+        e = el.find(end)
+        ends[end] = None if e is None else e.get("link")
+        if ends[end] is None:
+            problems.append(f"{label}: missing <{end} link=...>")
+        elif ends[end] not in link_names:
+            problems.append(f"{label}: {end} link {ends[end]!r} is not a <link> of the file")
+    origin = _origin_transform(el, label, problems)
+    axis = np.array((1.0, 0.0, 0.0))
+    damping = 0.0
+    limits, raw = (-np.inf, np.inf), None
+    mimic = None
+    for child in el:
+        if child.tag not in _JOINT_CHILDREN and isinstance(child.tag, str):
+            notes.add("tags", f"<{child.tag}> in joint {name!r}")
+    if jtype in _MOVING:
+        limits, raw = _read_limits(el, jtype, label, problems, notes)
+        ax = el.find("axis")
+        if ax is not None:
+            axis = _floats(ax.get("xyz"), 3, f"{label} <axis xyz>", problems, (1, 0, 0))
+        norm = float(np.linalg.norm(axis))
+        if norm == 0.0:
+            problems.append(f"{label}: <axis xyz> must not be zero")
+            axis = np.array((1.0, 0.0, 0.0))
+        else:
+            axis = axis / norm
+    dyn = el.find("dynamics")
+    if dyn is not None:
+        damping = float(_floats(dyn.get("damping", "0"), 1, f"{label} <dynamics damping>",
+                                problems, (0,))[0])
+        friction = float(_floats(dyn.get("friction", "0"), 1, f"{label} <dynamics friction>",
+                                 problems, (0,))[0])
+        if damping < 0:
+            problems.append(f"{label}: <dynamics damping> must be >= 0 (N m s/rad or N s/m), "
+                            f"got {damping!r}")
+        if friction != 0.0:
+            notes.add("friction", name)
+    if el.find("safety_controller") is not None:
+        notes.add("safety", name)
+    if el.find("calibration") is not None:
+        notes.add("calibration", name)
+    mim = el.find("mimic")
+    if mim is not None:
+        if jtype == "fixed":
+            notes.add("mimic_fixed", name)
+        elif not mim.get("joint"):
+            problems.append(f"{label}: <mimic> without joint=...")
+        else:
+            mult = float(_floats(mim.get("multiplier"), 1, f"{label} <mimic multiplier>",
+                                 problems, (1.0,))[0])
+            off = float(_floats(mim.get("offset"), 1, f"{label} <mimic offset>", problems,
+                                (0.0,))[0])
+            mimic = (mim.get("joint"), mult, off)
+    return _Joint(name, jtype, ends["parent"], ends["child"], origin, axis, damping, limits,
+                  raw, mimic)
+
+
+def _parse(robot, problems, notes):
+    """(link names, {link: inertia or None}, [joints], {link: has mass problem}) of <robot>."""
+    if robot.tag != "robot":
+        problems.append(f"the root element must be <robot>, got <{robot.tag}>")
+    for child in robot:
+        if isinstance(child.tag, str) and child.tag not in _ROBOT_CHILDREN:
+            notes.add("tags", f"<{child.tag}>")
+    link_els = robot.findall("link")
+    link_names = [el.get("name") for el in link_els]
+    if None in link_names:
+        problems.append("a <link> without a name attribute")
+    dup = sorted({n for n in link_names if n is not None and link_names.count(n) > 1})
+    if dup:
+        problems.append(f"link names repeat: {dup}")
+    inertias, bad_inertia = {}, set()
+    for el in link_els:
+        n_before = len(problems)
+        inertias[el.get("name")] = _read_inertial(el, problems)
+        if len(problems) > n_before:
+            bad_inertia.add(el.get("name"))
+        if el.find("visual") is not None or el.find("collision") is not None:
+            notes.add("visual", el.get("name"))
+        for child in el:
+            if isinstance(child.tag, str) and child.tag not in _LINK_CHILDREN:
+                notes.add("tags", f"<{child.tag}> in link {el.get('name')!r}")
+    names = {n for n in link_names if n is not None}
+    joints = [j for j in (_read_joint(el, names, problems, notes)
+                          for el in robot.findall("joint")) if j is not None]
+    jnames = [j.name for j in joints]
+    dup = sorted({n for n in jnames if jnames.count(n) > 1})
+    if dup:
+        problems.append(f"joint names repeat: {dup}")
+    return [n for n in link_names if n is not None], inertias, joints, bad_inertia
+
+
+# ============================================================================ the tree
+@dataclass
+class _Tree:
+    root: str
+    children: dict            # link -> [joints]
+    parent_joint: dict        # link -> joint
+
+
+def _tree(links, joints, problems):
+    children = {n: [] for n in links}
+    parent_joint = {}
+    for j in joints:
+        if j.parent in children and j.child in children:
+            children[j.parent].append(j)
+            if j.child in parent_joint:
+                problems.append(f"link {j.child!r} is the child of two joints "
+                                f"({parent_joint[j.child].name!r}, {j.name!r})")
+            parent_joint[j.child] = j
+    roots = [n for n in links if n not in parent_joint]
+    if len(roots) != 1:
+        problems.append(f"the URDF must have exactly one root link (a link that is no joint's "
+                        f"child), found {roots}")
+        return None
+    reached, todo = {roots[0]}, [roots[0]]
+    while todo:
+        for j in children[todo.pop()]:
+            if j.child not in reached:
+                reached.add(j.child)
+                todo.append(j.child)
+    lost = [n for n in links if n not in reached]
+    if lost:
+        problems.append(f"links {lost} are not connected to the root link {roots[0]!r} "
+                        "(a cycle of joints?)")
+        return None
+    return _Tree(roots[0], children, parent_joint)
+
+
+def _path(tree, top, bottom):
+    """Joints from link ``top`` down to link ``bottom`` (None if bottom is not below top)."""
+    out, link = [], bottom
+    while link != top:
+        j = tree.parent_joint.get(link)
+        if j is None:
+            return None
+        out.append(j)
+        link = j.parent
+    return out[::-1]
+
+
+def _subtree_joints(tree, link):
+    out, stack = [], [link]
+    while stack:
+        for j in tree.children[stack.pop()]:
+            out.append(j)
+            stack.append(j.child)
+    return out
+
+
+def _select_chain(tree, chain, frozen, problems):
+    """(root, tip, chain joints) or None; appends the problems of the chain choice."""
+    root, tip = tree.root, None
+    if chain is not None:
+        if isinstance(chain, str) or not isinstance(chain, Sequence) or not 1 <= len(chain) <= 2:
+            problems.append(f"chain must be (root link, tip link) or (root link,), got {chain!r}")
+            return None
+        root = tree.root if chain[0] is None else chain[0]
+        tip = chain[1] if len(chain) == 2 else None
+        bad = [f"{what} {name!r}" for what, name in (("root", root), ("tip", tip))
+               if name is not None and name not in tree.children]
+        if bad:
+            problems.append(f"chain {', '.join(bad)}: not a link of the file; links: "
+                            f"{sorted(tree.children)}")
+            return None
+    if tip is None:
+        candidates = [j for j in _subtree_joints(tree, root) if j.moving and j.name not in frozen]
+        if not candidates:
+            problems.append(f"no revolute, continuous or prismatic joint below link {root!r} "
+                            "(frozen joints do not count)")
+            return None
+        names = {j.name for j in candidates}
+        leaves = [j for j in candidates
+                  if not any(k.name in names for k in _subtree_joints(tree, j.child))]
+        if len(leaves) > 1:
+            ends = [j.child for j in leaves]
+            problems.append(f"the moving joints below link {root!r} lie on {len(ends)} "
+                            f"branches ending at links {ends}: choose one with "
+                            f"chain=({root!r}, <tip link>); the joints off it are frozen "
+                            "(frozen={name: value}, default 0)")
+            return None
+        tip = leaves[0].child
+    path = _path(tree, root, tip)
+    if path is None:
+        problems.append(f"chain tip {tip!r} is not below the chain root {root!r} (the path "
+                        f"from the URDF root {tree.root!r} to {tip!r} is "
+                        f"{[j.name for j in _path(tree, tree.root, tip)]})")
+        return None
+    moving = [j for j in path if j.moving]
+    if not moving:
+        problems.append(f"the chain {root!r} -> {tip!r} has no revolute, continuous or "
+                        "prismatic joint")
+        return None
+    return root, tip, moving
+
+
+def _frozen_values(tree, joints, chain_joints, above, frozen, problems, notes):
+    """{joint: value} of every moving joint off the chain (given, mimicked or 0)."""
+    by_name = {j.name: j for j in joints}
+    on_chain = {j.name for j in chain_joints}
+    values = {}
+    for name, v in frozen.items():
+        j = by_name.get(name)
+        off = sorted(k.name for k in joints if k.moving and k.name not in on_chain)
+        if j is None:
+            problems.append(f"frozen joint {name!r}: no such joint; moving joints off the "
+                            f"chain: {off}")
+            continue
+        if not j.moving:
+            problems.append(f"frozen joint {name!r} is a fixed joint (nothing to freeze)")
+            continue
+        if name in on_chain:
+            problems.append(f"frozen joint {name!r} is on the chain (a gpme coordinate); "
+                            "choose another chain or do not freeze it")
+            continue
+        if j.type in _UNSUPPORTED:
+            problems.append(f"frozen joint {name!r}: a {j.type} joint off the chain is frozen "
+                            "at its origin; a value cannot be given")
+            continue
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            x = math.nan
+        if not math.isfinite(x):
+            problems.append(f"frozen joint {name!r}: value must be a finite number (rad or m), "
+                            f"got {v!r}")
+            continue
+        lo, hi = j.limits
+        if not lo <= x <= hi:
+            unit = "m" if j.type == "prismatic" else "rad"
+            problems.append(f"frozen joint {name!r} = {x!r} {unit} is outside its <limit> "
+                            f"[{lo!r}, {hi!r}]")
+            continue
+        values[name] = x
+    for j in above:
+        if j.moving and j.name not in frozen:
+            problems.append(f"joint {j.name!r} ({j.type}) lies above the chain root and would "
+                            f"move the whole chain: freeze it with frozen={{{j.name!r}: value}} "
+                            "or start the chain higher")
+    for j in chain_joints:
+        if j.mimic is not None:
+            problems.append(f"joint {j.name!r} on the chain mimics {j.mimic[0]!r}: every gpme "
+                            "coordinate is independent; choose a chain without it or freeze "
+                            "it off the chain")
+        if j.type in _UNSUPPORTED:
+            problems.append(f"joint {j.name!r} on the chain: type {j.type!r} is not supported "
+                            f"({_UNSUPPORTED[j.type]}); gpme coordinates are revolute or "
+                            "prismatic")
+    defaults, mimicked, outside, unsupported = [], [], [], []
+    todo = [j for j in joints if j.moving and j.name not in on_chain and j.name not in values
+            and j.name not in frozen]
+    for _ in range(len(todo) + 1):          # mimic of a mimic: resolve in passes
+        left = []
+        for j in todo:
+            if j.type in _UNSUPPORTED:
+                values[j.name] = 0.0
+                unsupported.append(j.name)
+            elif j.mimic is None:
+                values[j.name] = 0.0
+                defaults.append(j.name)
+            elif j.mimic[0] in values:
+                src, mult, off = j.mimic
+                values[j.name] = mult * values[src] + off
+                mimicked.append(f"{j.name} = {mult!r} * {src} + {off!r} = {values[j.name]!r}")
+            else:
+                left.append(j)
+        if len(left) == len(todo):
+            break
+        todo = left
+    for j in todo:
+        src = j.mimic[0]
+        why = ("is on the chain" if src in on_chain else
+               "is not a joint of the file" if src not in by_name else "cannot be resolved")
+        problems.append(f"joint {j.name!r} off the chain mimics {src!r}, which {why}: give "
+                        f"its value with frozen={{{j.name!r}: value}}")
+    for name in defaults:
+        lo, hi = by_name[name].limits
+        if not lo <= 0.0 <= hi:
+            outside.append(f"{name} [{lo:g}, {hi:g}]")
+    if defaults:
+        notes.line(f"{len(defaults)} joints off the chain frozen at the default 0 (rad or m): "
+                   + ", ".join(defaults))
+    if outside:
+        notes.line(f"the default 0 is outside the <limit> of frozen joints "
+                   f"{', '.join(outside)}: give their values in frozen= if it matters")
+    if mimicked:
+        notes.line("mimic joints off the chain frozen where they follow the joint they mimic "
+                   "(multiplier * value + offset): " + "; ".join(mimicked))
+    if unsupported:
+        notes.line(f"floating/planar joints off the chain frozen at their origin: "
+                   + ", ".join(unsupported))
+    return values
+
+
+# ============================================================================ flexible links
+def _vector(v, label, problems):
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (3,) or not np.all(np.isfinite(a)):
+        problems.append(f"{label}: expected 3 finite numbers, got {v!r}")
+        return None
+    return a
+
+
+def _beam_plan(name, spec, t_next, problems):
+    """(BeamProperties, n_segments, (4, 4) beam frame in the link frame) or None.
+
+    t_next: (4, 4) link frame -> next chain joint frame at q = 0, None at the chain tip.
+    """
+    label = f"flexible link {name!r}"
+    if isinstance(spec, tuple) and len(spec) == 2 and isinstance(spec[0], BeamProperties):
+        beam, n = spec
+        bad = beam.problems(label)
+        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
+            bad.append(f"{label}: n_segments must be an integer >= 0, got {n!r}")
+        problems.extend(bad)
+        return None if bad else (beam, int(n), np.eye(4))
+    if not isinstance(spec, FlexibleLink):
+        problems.append(f"{label}: expected a FlexibleLink or (BeamProperties, n_segments), "
+                        f"got {spec!r}")
+        return None
+    bad = []
+    if not isinstance(spec.section, BeamSection):
+        bad.append(f"{label}: section must be a gpme_core.rfem.BeamSection (solid_circle, "
+                   f"tube, rectangle), got {type(spec.section).__name__}")
+    n = spec.n_segments
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
+        bad.append(f"{label}: n_segments must be an integer >= 0, got {n!r}")
+    p = None if t_next is None else t_next[:3, 3]
+    if spec.axis is not None:
+        x = _vector(spec.axis, f"{label} axis", bad)
+        if x is not None and abs(np.linalg.norm(x) - 1.0) > _UNIT_TOL:
+            bad.append(f"{label}: axis must be a unit vector in the link frame, got "
+                       f"{x.tolist()} (norm {np.linalg.norm(x)!r})")
+            x = None
+    elif p is None:
+        bad.append(f"{label}: it is the chain tip (no next chain joint): give axis= (unit, "
+                   "link frame) and length= (m)")
+        x = None
+    elif np.linalg.norm(p) == 0.0:
+        bad.append(f"{label}: the next chain joint's frame is at the link origin, so the "
+                   "beam axis is undefined: give axis= (unit, link frame) and length= (m)")
+        x = None
+    else:
+        x = p / np.linalg.norm(p)
+    length = spec.length
+    if length is None and x is not None:
+        if p is None:
+            if spec.axis is not None:
+                bad.append(f"{label}: it is the chain tip (no next chain joint): give length= (m)")
+        else:
+            length = float(p @ x)
+            if not length > 0.0:
+                bad.append(f"{label}: the next chain joint lies {length!r} m along the given "
+                           "axis; give length= (m) or an axis pointing towards it")
+    y = None
+    if x is not None:
+        if spec.section_y_axis is not None:
+            s = _vector(spec.section_y_axis, f"{label} section_y_axis", bad)
+            if s is not None:
+                y = s - (s @ x) * x
+                if np.linalg.norm(y) <= _PARALLEL_TOL * np.linalg.norm(s):
+                    bad.append(f"{label}: section_y_axis {s.tolist()} is parallel to the beam "
+                               f"axis {x.tolist()} (or zero)")
+                    y = None
+        else:
+            y = np.array((0.0, 1.0, 0.0)) - x[1] * x
+            if np.linalg.norm(y) <= _PARALLEL_TOL:
+                y = np.array((0.0, 0.0, 1.0)) - x[2] * x
+    if isinstance(spec.section, BeamSection):
+        # material constants and the length, whether or not the geometry is complete
+        probe = BeamProperties.from_section(1.0 if length is None else length, spec.section,
+                                            spec.youngs_modulus, spec.shear_modulus,
+                                            spec.density, spec.bending_viscosity,
+                                            spec.torsion_viscosity)
+        bad += probe.problems(label)
+    problems.extend(bad)
+    if bad or x is None or y is None or length is None:
+        return None
+    y = y / np.linalg.norm(y)
+    frame = tf.homogeneous(np.column_stack((x, y, np.cross(x, y))), np.zeros(3))
+    beam = BeamProperties.from_section(float(length), spec.section, spec.youngs_modulus,
+                                       spec.shear_modulus, spec.density,
+                                       spec.bending_viscosity, spec.torsion_viscosity)
+    return beam, int(n), frame
+
+
+# ============================================================================ reading
+def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
+              massless_links=(), gravity=None, name=None) -> UrdfReadResult:
+    """Read the URDF at ``path`` into a gpme Model, through a chosen chain.
+
+    side_file     : "auto" (``<stem>.gpme.json`` beside the URDF if it exists), None (no
+                    side file: stiffness 0, gravity standard) or a path.  It restores
+                    stiffness, spring references, gravity, drives and RFEM records.
+    chain         : (root link, tip link); None = from the URDF root to the single path of
+                    moving joints (error listing the branch ends when there are several).
+    frozen        : {joint name: value (rad or m)} for joints off the chain; every other
+                    moving joint off the chain is frozen at 0 (a mimic joint: multiplier *
+                    value + offset of the joint it mimics).  Joints above the chain root
+                    must be listed here.
+    flexible      : {link name: FlexibleLink(...)} (or the older (BeamProperties, n)
+                    along +x); the link's <inertial> is replaced by the RFEM beam.
+    massless_links: chain links expected to carry no mass (no note for them); a massless
+                    chain link is accepted whenever M stays positive definite.
+    gravity       : (3,) m/s^2 in the URDF root (= gpme world) frame; None: the side
+                    file's, else (0, 0, -9.81).
+    name          : model name; None: the side file's, else the URDF robot name.
+
+    Returns an :class:`UrdfReadResult`; raises ModelFileError listing every problem found
+    in the XML, the side file, the inertials, joints, chain choice, frozen values, flexible
+    specs and the built model.
+    """
+    path = Path(path)
+    problems = []
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        text = None
+        problems.append(f"cannot read the URDF ({exc})")
+    side = None
+    if side_file == "auto":
+        if side_file_path(path).exists():
+            side, bad = read_side_file(side_file_path(path))
+            problems += bad
+    elif side_file is not None:
+        side, bad = read_side_file(side_file)
+        problems += bad
+    return _read(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
+                 massless_links=massless_links, gravity=gravity, name=name, source=str(path))
+
+
+def read_urdf(path, side_file="auto", flexible=None, massless_links=(), gravity=None,
+              name=None, *, chain=None, frozen=None) -> Model:
+    """The Model of :func:`load_urdf` (same arguments), without the report."""
+    return load_urdf(path, side_file=side_file, chain=chain, frozen=frozen, flexible=flexible,
+                     massless_links=massless_links, gravity=gravity, name=name).model
+
+
+def parse_urdf(text, side=None, flexible=None, massless_links=(), gravity=None, name=None,
+               source="<urdf>", *, chain=None, frozen=None) -> Model:
+    """:func:`read_urdf` on URDF ``text`` and a side-file dict ``side`` (or None)."""
+    problems = []
+    if side is not None:
+        problems = side_file_problems(side)
+        side = None if problems else side
+    return _read(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
+                 massless_links=massless_links, gravity=gravity, name=name,
+                 source=source).model
+
+
+def _fail(source, problems):
+    raise ModelFileError([p if p.startswith(source) or p.startswith("side file")
+                          else f"{source}: {p}" for p in problems])
+
+
+def _read(text, side, problems, *, chain, frozen, flexible, massless_links, gravity, name,
+          source) -> UrdfReadResult:
+    notes = _Notes()
+    robot = None
+    if text is not None:
+        try:
+            robot = ET.fromstring(text)
+        except ET.ParseError as exc:
+            problems.append(f"not well-formed XML ({exc})")
+    if robot is None:
+        _fail(source, problems)
+    frozen = dict(frozen or {})
+    flexible = dict(flexible or {})
+    links, inertias, joints, bad_inertia = _parse(robot, problems, notes)
+    tree = _tree(links, joints, problems)
+    picked = _select_chain(tree, chain, frozen, problems) if tree is not None else None
+    if picked is None:
+        _fail(source, problems)
+    root, tip, chain_joints = picked
+    above = _path(tree, tree.root, root)
+    values = _frozen_values(tree, joints, chain_joints, above, frozen, problems, notes)
+    chain_index = {j.name: k for k, j in enumerate(chain_joints)}
+
+    # owner chain index of every link (-1: fixed to the world) and its pose in that link
+    owner, pose, attached = {tree.root: -1}, {tree.root: np.eye(4)}, {}
+    chain_origin = {}
+    stack = [tree.root]
+    while stack:
+        link = stack.pop(0)
+        for j in tree.children[link]:
+            if j.name in chain_index:
+                k = chain_index[j.name]
+                chain_origin[k] = pose[link] @ j.origin
+                owner[j.child], pose[j.child] = k, np.eye(4)
+            else:
+                owner[j.child] = owner[link]
+                pose[j.child] = pose[link] @ j.origin @ j.motion(values.get(j.name, 0.0))
+                attached.setdefault(owner[link], []).append(j.child)
+            stack.append(j.child)
+    chain_links = [j.child for j in chain_joints]
+
+    dropped = [f"{lk} ({inertias[lk].mass:g} kg)" for lk in owner
+               if owner[lk] == -1 and inertias.get(lk) is not None]
+    if dropped:
+        notes.line("links fixed to the world (they do not move; their mass has no effect on "
+                   "the dynamics) dropped: " + ", ".join(dropped))
+    frozen_joints = [j for j in joints if j.name in values]
+    for k, lk in enumerate(chain_links):
+        branch = [j.name for j in frozen_joints if owner.get(j.parent) == k]
+        if branch:
+            moved = [x for x in attached.get(k, []) if inertias.get(x) is not None]
+            notes.line(f"frozen joints {branch} hang on chain link {lk!r}: the links below "
+                       f"them merged into it as mass and frames ({len(moved)} with mass)")
+
+    # side file, flexible specs
+    side = side or {}
+    side_flex = {r["name"]: r for r in side.get("flexible_links", [])}
+    side_joints = side.get("joints", {})
+    unknown = sorted(set(side_joints) - set(chain_index))
+    if unknown:
+        problems.append(f"the side file gives springs for joints {unknown} that are not moving "
+                        f"joints of the chain {[j.name for j in chain_joints]}")
+    plans = {}
+    for lk, spec in flexible.items():
+        if lk not in chain_links:
+            problems.append(f"flexible link {lk!r}: not a link moved by a joint of the chain "
+                            f"(moving links: {chain_links})")
+            continue
+        if lk in side_flex and side_flex[lk]["n_segments"] > 0:
+            problems.append(f"flexible link {lk!r}: already RFEM-discretised with "
+                            f"{side_flex[lk]['n_segments']} segments in this file; read the "
+                            "rigid model to re-discretise it")
+            continue
+        k = chain_links.index(lk)
+        plans[lk] = _beam_plan(lk, spec, chain_origin.get(k + 1), problems)
+    allowed_massless = set(massless_links) | set(side.get("massless_links", []))
+    massless = [lk for k, lk in enumerate(chain_links) if lk not in allowed_massless
+                and lk not in flexible and inertias.get(lk) is None and lk not in bad_inertia
+                and all(inertias.get(x) is None for x in attached.get(k, []))]
+    if massless:
+        notes.line("chain links without mass (accepted: the mass matrix is checked positive "
+                   "definite): " + ", ".join(massless))
+
+    # build (also when earlier problems exist, to report the model's own problems too)
+    g = gravity if gravity is not None else side.get("gravity", STANDARD_GRAVITY)
+    builder = ChainBuilder(name or side.get("model") or robot.get("name") or "urdf", gravity=g)
+    frames = []
+    model = None
+    try:
+        after = np.eye(4)       # correction of the previous link's frame (beam tip)
+        for k, j in enumerate(chain_joints):
+            spring = side_joints.get(j.name, {})
+            builder.add_joint(j.name, _MOVING.get(j.type, REVOLUTE), j.axis,
+                              origin=after @ chain_origin[k],
+                              stiffness=spring.get("stiffness", 0.0),
+                              spring_reference=spring.get("spring_reference", 0.0),
+                              damping=j.damping, link=j.child, limits=j.limits)
+            after = np.eye(4)
+            lk = j.child
+            plan = plans.get(lk)
+            if lk in flexible and plan is None:
+                # the spec has problems (reported): build it rigid so that the model's own
+                # problems, if any, are not artefacts of the missing beam
+                if inertias.get(lk) is not None:
+                    builder.add_body(inertias[lk])
+            elif lk in flexible:
+                if plan is not None:
+                    beam, n, t_beam = plan
+                    builder.add_beam(lk, beam, n, frame=t_beam)
+                    after = tf.inverse(t_beam @ tf.translation(beam.length))
+                    was = inertias.get(lk)
+                    notes.line(f"link {lk}: URDF inertial "
+                               f"{'none' if was is None else f'{was.mass:g} kg'} replaced by "
+                               f"the RFEM beam {beam.mass:.6g} kg ({n} segments, length "
+                               f"{beam.length:.6g} m)")
+            elif inertias.get(lk) is not None:
+                builder.add_body(inertias[lk])
+            for x in attached.get(k, []):
+                if inertias.get(x) is not None:
+                    builder.add_body(inertias[x], origin=after @ pose[x])
+                builder.add_frame(x, after @ pose[x])
+                frames.append(x)
+        for rec in side.get("drives", []):
+            builder.add_drive(rec["joint"], getattr(time_functions, rec["function"])(
+                **rec["parameters"]))
+        model = builder.build()
+        model = _with_flexible_records(model, side_flex, flexible)
+    except ModelError as exc:
+        suffix = (" (found with the invalid <inertial> elements above left out)"
+                  if bad_inertia else "")
+        problems += [p + suffix for p in exc.problems]
+    except TypeError as exc:
+        problems.append(str(exc))
+    if problems:
+        _fail(source, problems)
+    return UrdfReadResult(model, notes.lines(), MappingProxyType(dict(values)), (root, tip),
+                          tuple(j.name for j in chain_joints), tuple(frames))
+
+
+def _with_flexible_records(model, side_flex, flexible):
+    """Add the side file's RFEM records (beams not re-discretised on reading)."""
+    records = list(model.flexible_links)
+    problems = []
+    for name, rec in side_flex.items():
+        if name in flexible:
+            continue
+        try:
+            joints = tuple(model.index(j) for j in rec["joints"])
+            links = tuple([lk.name for lk in model.links].index(lk) for lk in rec["links"])
+        except (ModelError, ValueError):
+            problems.append(f"side file flexible link {name!r}: its joints {rec['joints']} or "
+                            f"links {rec['links']} are not all in the URDF chain")
+            continue
+        records.append(FlexibleLinkInfo(name, BeamProperties(**rec["beam"]), rec["n_segments"],
+                                        joints, links))
+    if problems:
+        raise ModelFileError(problems)
+    if len(records) == len(model.flexible_links):
+        return model
+    order = {lk.name: k for k, lk in enumerate(model.links)}
+    records.sort(key=lambda r: order.get(r.name, -1))
+    out = Model(model.joints, model.links, model.frames, model.drives, model.gravity, records,
+                model.name)
+    validate_model(out)
+    return out

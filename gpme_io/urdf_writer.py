@@ -1,0 +1,157 @@
+"""Write a gpme model as URDF plus the gpme side file.
+
+:func:`write_urdf` maps a serial-chain :class:`gpme_core.model.Model` to URDF one to one
+(docs/urdf.md has the full table):
+
+* world            -> root link ``world`` (no inertial; MuJoCo makes it its worldbody);
+* joint k          -> a ``revolute`` or ``prismatic`` joint named after coordinate k,
+                      parent = link k-1 (``world`` for k = 0), child = link k,
+                      <origin> = ``Joint.origin`` (xyz m, rpy rad), <axis> = ``Joint.axis``,
+                      <dynamics damping> = ``Joint.damping``, <limit lower upper> =
+                      ``Joint.limits`` with an infinite end written as -+UNLIMITED (URDF
+                      needs finite numbers; the reader maps |limit| >= UNLIMITED back to inf);
+* link k           -> a link with <inertial> (com in the link frame, rpy 0, inertia about
+                      the com in link axes); a massless link (the two intermediate frames
+                      of an RFEM spring-damping element) gets an explicit zero <inertial>
+                      (mass 0, zero tensor, origin 0): a link without <inertial> is 1 kg
+                      with unit inertia in PyBullet;
+* frame ``F``      -> a link ``F`` with a zero <inertial> on a fixed joint ``F_fixed``;
+* stiffness, spring reference, gravity, drives, the massless-link list and the RFEM
+  records go to the side file ``<stem>.gpme.json`` beside the URDF (gpme_io.side_file).
+
+A ``<mujoco><compiler .../></mujoco>`` element tells MuJoCo's URDF importer to keep
+fixed links as bodies and to bound the mass of the massless links at MUJOCO_BOUND (kg,
+kg m^2), which MuJoCo needs to accept a moving body; every other reader ignores it.
+"""
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from gpme_core import transforms as tf
+from gpme_core.atomic import atomic_write_text
+from gpme_core.errors import ModelFileError
+from gpme_core.model import PRISMATIC, REVOLUTE, Model
+
+from .side_file import SIDE_SUFFIX, drive_record, side_document, side_file_path, side_file_text
+
+ROOT_LINK = "world"
+# rad or m: the <limit> written for an infinite end of a gpme joint range (URDF needs a
+# finite one for revolute and prismatic joints); 1e6 rad is ~160 000 turns, never reached.
+# Also written as effort (N, N m) and velocity (m/s, rad/s) limits, which gpme does not have.
+UNLIMITED = 1.0e6
+# kg and kg m^2: MuJoCo's importer lower bound for the massless links (MuJoCo rejects a
+# moving body with mass <= 1e-15).  MuJoCo-only: gpme and Pinocchio read zero mass.
+MUJOCO_BOUND = 1e-12
+FIXED_SUFFIX = "_fixed"
+_URDF_KIND = {REVOLUTE: "revolute", PRISMATIC: "prismatic"}
+
+
+def _num(x) -> str:
+    """Shortest text that reads back as the same float (repr), without '-0.0'."""
+    x = float(x)
+    return "0" if x == 0.0 else repr(x)
+
+
+def _vec(v) -> str:
+    return " ".join(_num(x) for x in v)
+
+
+def _origin(parent, transform) -> None:
+    """<origin xyz rpy> of a (4, 4) transform (parent frame -> child frame)."""
+    t = np.asarray(transform, dtype=float)
+    ET.SubElement(parent, "origin", xyz=_vec(t[:3, 3]), rpy=_vec(tf.rotation_to_rpy(t[:3, :3])))
+
+
+def _inertial(parent, inertia) -> None:
+    """<inertial> of a RigidBodyInertia (com frame = link axes moved to the com), or the
+    explicit zero <inertial> of a massless link when ``inertia`` is None."""
+    el = ET.SubElement(parent, "inertial")
+    if inertia is None:
+        ET.SubElement(el, "origin", xyz="0 0 0", rpy="0 0 0")
+        ET.SubElement(el, "mass", value="0")
+        ET.SubElement(el, "inertia", ixx="0", ixy="0", ixz="0", iyy="0", iyz="0", izz="0")
+        return
+    ET.SubElement(el, "origin", xyz=_vec(inertia.com), rpy="0 0 0")
+    ET.SubElement(el, "mass", value=_num(inertia.mass))
+    i = inertia.inertia_array
+    ET.SubElement(el, "inertia", ixx=_num(i[0, 0]), ixy=_num(i[0, 1]), ixz=_num(i[0, 2]),
+                  iyy=_num(i[1, 1]), iyz=_num(i[1, 2]), izz=_num(i[2, 2]))
+
+
+def _name_problems(model: Model) -> list:
+    problems = []
+    link_names = [ROOT_LINK] + [lk.name for lk in model.links] + list(model.frames)
+    joint_names = list(model.coordinate_names) + [f + FIXED_SUFFIX for f in model.frames]
+    for kind, names in (("link", link_names), ("joint", joint_names)):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            problems.append(f"URDF {kind} names would repeat: {dup} (the root link is "
+                            f"{ROOT_LINK!r}, frames become links, frame F gets joint "
+                            f"'F{FIXED_SUFFIX}'); rename the links, frames or coordinates")
+    return problems
+
+
+def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) -> tuple:
+    """(URDF text, side-file dict) of ``model``; see the module docstring for the mapping.
+
+    include_drives: store the drives in the side file; each drive function must then be a
+    dataclass of gpme_core.time_functions (ModelFileError otherwise).
+    urdf_name     : stem of the URDF file, named in its comment (default the model name).
+    """
+    problems = _name_problems(model)
+    drives = []
+    if include_drives:
+        for d in model.drives:
+            rec = drive_record(d)
+            if rec is None:
+                problems.append(f"drive on {d.joint!r}: {d.function!r} is not a dataclass of "
+                                "gpme_core.time_functions and cannot be stored; write with "
+                                "include_drives=False and add the drive after reading")
+            drives.append(rec)
+    if problems:
+        raise ModelFileError(problems)
+    robot = ET.Element("robot", name=model.name)
+    robot.append(ET.Comment(
+        f" Generated from gpme model {model.name!r} by gpme_io.urdf_writer; do not edit. "
+        f"Stiffness, spring references, gravity and drives are in the side file "
+        f"{(urdf_name or model.name)}{SIDE_SUFFIX} (docs/urdf.md). "))
+    mj = ET.SubElement(robot, "mujoco")
+    ET.SubElement(mj, "compiler", discardvisual="false", fusestatic="false",
+                  boundmass=_num(MUJOCO_BOUND), boundinertia=_num(MUJOCO_BOUND))
+    ET.SubElement(robot, "link", name=ROOT_LINK)
+    parent = ROOT_LINK
+    for joint, link in zip(model.joints, model.links):
+        j = ET.SubElement(robot, "joint", name=joint.name, type=_URDF_KIND[joint.kind])
+        ET.SubElement(j, "parent", link=parent)
+        ET.SubElement(j, "child", link=link.name)
+        _origin(j, joint.origin)
+        ET.SubElement(j, "axis", xyz=_vec(joint.axis))
+        lower, upper = (float(np.clip(v, -UNLIMITED, UNLIMITED)) for v in joint.limits)
+        ET.SubElement(j, "limit", lower=_num(lower), upper=_num(upper),
+                      effort=_num(UNLIMITED), velocity=_num(UNLIMITED))
+        ET.SubElement(j, "dynamics", damping=_num(joint.damping), friction="0")
+        _inertial(ET.SubElement(robot, "link", name=link.name), link.inertia)
+        parent = link.name
+    for name, fr in model.frames.items():
+        j = ET.SubElement(robot, "joint", name=name + FIXED_SUFFIX, type="fixed")
+        ET.SubElement(j, "parent", link=model.links[fr.link_index].name)
+        ET.SubElement(j, "child", link=name)
+        _origin(j, fr.transform)
+        _inertial(ET.SubElement(robot, "link", name=name), None)
+    ET.indent(robot, space="  ")
+    text = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"
+    return text, side_document(model, drives)
+
+
+def write_urdf(model: Model, path, include_drives: bool = True) -> tuple:
+    """Write ``model`` to the URDF ``path`` and its side file beside it (atomically).
+
+    Returns (urdf path, side-file path).
+    """
+    path = Path(path)
+    text, side = urdf_documents(model, include_drives, urdf_name=path.stem)
+    side_path = side_file_path(path)
+    atomic_write_text(path, text)
+    atomic_write_text(side_path, side_file_text(side))
+    return path, side_path
