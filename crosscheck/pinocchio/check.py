@@ -1,53 +1,71 @@
-"""Term-by-term crosscheck of the gpme engine against Pinocchio (docs/crosscheck-pinocchio.md).
+"""Term-by-term crosscheck of the gpme engine against Pinocchio, for any Scenario
+(docs/crosscheck-pinocchio.md).
 
-For each model case (the crane rigid and RFEM-flexible, built directly and round-tripped
-through URDF) and each state (seeded random states over the working range, and states
-along simulated runs), every term is compared through crosscheck.compare.compare:
+For each scenario (gpme_io.scenario.Scenario) up to three model cases:
 
-    quantity           gpme                                Pinocchio
-    pose position/rot. kinematics.chain_kinematics T, frames   forwardKinematics + updateFramePlacements (oMf)
-    M                  dynamics.mass_matrix                crba (lower triangle checked, see _crba)
-    g                  dynamics.gravity_forces (dE_p/dq)   computeGeneralizedGravity  (same sign)
-    h                  dynamics.velocity_product_terms     -(rnea(q, v, 0) - computeGeneralizedGravity)
-    applied tau        -(f + d) + t                        -K (q - q_ref) - D v + t from Pinocchio's
-                                                           URDF damping and the side file's springs
-    E position/velocity/Jacobian/drift  kinematics.point_kinematics   frame placement, getFrameVelocity,
-                       getFrameJacobian, getFrameClassicalAcceleration (LOCAL_WORLD_ALIGNED, a = 0)
-    Phi, Phi_dot, A, kappa   gpme constraints           the same constraint functions at Pinocchio's
-                                                           E position, velocity, Jacobian and drift
-    free q_ddot        M^-1 (h + Q)  (no constraints)      aba(q, v, tau)
-    constrained q_ddot reduced GPME (ProgrammedMotion.solve)   forwardDynamics(q, v, tau, A, gamma),
-                                                           gamma = kappa + 2 alpha Phi_dot + beta^2 Phi
-    lambda, A^T lambda gpme multipliers / reactions        data.lambda_c, A^T lambda_c
+    "direct"        the scenario's gpme model against a pin.Model built from it joint by
+                    joint (model.from_gpme);
+    "URDF"          the gpme model written by gpme_io.urdf.write_urdf to out_dir/urdf/, read
+                    back by gpme's reader and by Pinocchio's own parser (model.from_urdf);
+    "original URDF" when the scenario comes from a user's URDF and has no flexible link:
+                    Pinocchio reads that URDF itself and locks every joint off the chain with
+                    buildReducedModel at the frozen values (model.from_original_urdf).
+
+and for each state (seeded random states within the joint limits, states along a short run)
+every term is compared through crosscheck.compare.compare:
+
+    quantity            gpme                                 Pinocchio
+    pose position/rot.  chain_kinematics T of links, frames  forwardKinematics + updateFramePlacements (oMf)
+    M                   dynamics.mass_matrix                 crba (lower triangle checked, see _crba)
+    g                   dynamics.gravity_forces (dE_p/dq)    computeGeneralizedGravity  (same sign)
+    h                   dynamics.velocity_product_terms      -(rnea(q, v, 0) - computeGeneralizedGravity)
+    applied tau         -(f + d) + t                         -K (q - q_ref) - D v + t from this side's data
+    frame position/velocity/jacobian/drift of every model frame (the constraint frames among them):
+                        kinematics.point_kinematics          oMf, getFrameVelocity, getFrameJacobian,
+                                                             getFrameClassicalAcceleration (LOCAL_WORLD_ALIGNED, a = 0)
+    Phi, Phi_dot, A, kappa   ProgrammedMotion.solve          crosscheck.constraint_reference (SymPy derivatives
+                                                             of the task expressions) at Pinocchio's frame states
+    free q_ddot         M^-1 (h + Q)  (no constraints)       aba(q, v, tau)
+    constrained q_ddot  reduced GPME (ProgrammedMotion.solve)  forwardDynamics(q, v, tau, A, gamma),
+                                                             gamma = kappa + 2 alpha Phi_dot + beta^2 Phi
+    lambda, A^T lambda  gpme multipliers / reactions         data.lambda_c, A^T lambda_c
 
 Sign conventions: gpme M q_ddot = h + Q + A^T lambda with Q = -(g + d + f) + t; Pinocchio
 M a + b(q, v) = tau + J^T lambda_c with b = rnea(q, v, 0) = C v + g_pin and J a + gamma = 0.
 Hence g_pin = g, h = -(b - g_pin), tau = Q + g, and the multipliers agree with the same sign.
 """
+import html
+import logging
 import time
-from dataclasses import dataclass
+import zlib
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Mapping, Optional, Sequence
 
 import numpy as np
 import pandas as pd
 import pinocchio as pin
+from numpy.typing import NDArray
 
-from gpme_core.constraints import PointConstraint
-from gpme_examples.crane import CraneParameters, crane_constraints, crane_system, initial_state
 from gpme_core.errors import ConstraintError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
-
-from ..reports import tables as report
-from ..compare import Tolerance, compare
-from .model import from_gpme, from_urdf
+from gpme_core.model import Model
 from gpme_io.urdf import read_urdf, write_urdf
+
+from ..compare import Tolerance, compare, tolerance_for
+from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
+                                    reference_constraints)
+from ..reports import tables as report
+from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
 
 ENGINE = "pinocchio"
 SEED = 20240611
-CRANE_SEGMENTS = (0, 1, 3, 10)        # n_rfe of the crane cases; 0 = rigid arm
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+SECTIONS = ("terms", "runs")
+CASE_KINDS = ("direct", "URDF", "original URDF")
+log = logging.getLogger("gpme.crosscheck.pinocchio")
 
 _ROUND_OFF = ("round-off only: both engines evaluate the same closed-form quantity in double "
               "precision through ~n products of 4x4 transforms or spatial recursions")
@@ -56,13 +74,13 @@ _FORCE = ("round-off only: sums of products of inertia, transforms and velocitie
 EPS = np.finfo(float).eps
 # eps cond(M) is the first-order forward error of one backward-stable solve, an estimate
 # rather than a bound; two engines' errors add (x2) and the estimate gets a margin of 4
-# (the full run measured errors up to 1.5 eps cond(M) for the reactions): SOLVE_FACTOR = 8.
+# (the full crane run measured errors up to 1.5 eps cond(M) for the reactions): SOLVE_FACTOR = 8.
 SOLVE_FACTOR = 8.0
 _SOLVE = ("linear solve with M (aba / KKT in Pinocchio, Cholesky / reduced GPME in gpme): "
-          "forward error ~eps cond(M) relative, and the RFEM arm makes M ill-conditioned "
-          "(element torsion inertias ~1e-9 kg m^2 next to ~10 kg of crane: cond(M) up to ~3e7 "
-          "for n = 10); tol_rel = max(1e-12, 8 eps cond_2(M)) (x2 two engines, x4 margin), "
-          "here cond(M) = {cond:.1e}")
+          "forward error ~eps cond(M) relative; an RFEM link makes M ill-conditioned "
+          "(element torsion inertias ~1e-9 kg m^2 beside kilograms of robot: cond(M) up to "
+          "~3e7 for the crane with n = 10); tol_rel = max(1e-12, 8 eps cond_2(M)) (x2 two "
+          "engines, x4 margin), here cond(M) = {cond:.1e}")
 _MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = 8 eps cond(M) "
                "max|A^T lambda| ||A_dc^-T||_inf = {tol:.1e}")
 # Each tolerance: abs (in the quantity's unit, a floor for exact zeros such as h at rest)
@@ -73,26 +91,29 @@ TOLERANCES = {
     "M": Tolerance(1e-14, 1e-12, _FORCE + " (kg, kg m, kg m^2)"),
     "g": Tolerance(1e-12, 1e-12, _FORCE + " (N, N m)"),
     "h": Tolerance(1e-12, 1e-11, _FORCE + "; h cancels terms of size |M| |q_dot|^2, which "
-                   "can be 100x its result (measured up to 5e-13)"),
+                   "can be 100x its result (crane: measured up to 5e-13)"),
     "applied tau": Tolerance(1e-12, 1e-12, "same springs/dampers from two sources (gpme model "
-                             "vs Pinocchio's URDF damping + side-file springs): exact up to "
-                             "one rounding"),
-    "E position": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m)"),
-    "E velocity": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m/s)"),
-    "E jacobian": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m or m/rad)"),
-    "E drift": Tolerance(1e-12, 1e-11, _ROUND_OFF + "; the drift sums ~n^2 velocity "
-                         "products (m/s^2)"),
-    "Phi": Tolerance(1e-14, 1e-12, "constraint value at the two E positions; round-off"),
-    "Phi_dot": Tolerance(1e-13, 1e-12, "constraint rate from the two E velocities; round-off. "
-                         "Phi_dot -> 0 on the constraint manifold, so along runs the abs "
-                         "floor (1/s for Phi_1, m/s for Phi_2) decides; measured <= 1e-14"),
-    "constraint jacobian A": Tolerance(1e-14, 1e-12, "grad(phi)^T J at the two E states; "
+                             "vs Pinocchio's URDF damping + side-file or model-file springs): "
+                             "exact up to one rounding"),
+    "frame position": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m)"),
+    "frame velocity": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m/s)"),
+    "frame jacobian": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m or m/rad)"),
+    "frame drift": Tolerance(1e-12, 1e-11, _ROUND_OFF + "; the drift sums ~n^2 velocity "
+                             "products (m/s^2)"),
+    "Phi": Tolerance(1e-14, 1e-12, "constraint value at the two frame positions; round-off"),
+    "Phi_dot": Tolerance(1e-13, 1e-12, "constraint rate from the two frame velocities; "
+                         "round-off. Phi_dot -> 0 on the constraint manifold, so along runs "
+                         "the abs floor (the constraint's unit per s) decides"),
+    "constraint jacobian A": Tolerance(1e-14, 1e-12, "dPhi_dot/dv J at the two frame states; "
                                        "round-off"),
-    "constraint kappa": Tolerance(1e-12, 1e-11, "grad(phi).drift + p_dot^T Hess p_dot + ...; "
-                                  "inherits the drift tolerance"),
+    "constraint kappa": Tolerance(1e-12, 1e-11, "Phi_ddot at a = drift (SymPy derivative of "
+                                  "the task expression); inherits the drift tolerance"),
 }
 # quantities from a linear solve with M: tolerances set per state by solve_tolerances
 SOLVED = ("free q_ddot", "constrained q_ddot", "multipliers lambda", "reactions A^T lambda")
+CONSTRAINT_QUANTITIES = ("Phi", "Phi_dot", "constraint jacobian A", "constraint kappa",
+                         "constrained q_ddot", "multipliers lambda", "reactions A^T lambda")
+FRAME_QUANTITIES = ("frame position", "frame velocity", "frame jacobian", "frame drift")
 
 
 def solve_tolerances(m, reactions, a_dc):
@@ -106,28 +127,52 @@ def solve_tolerances(m, reactions, a_dc):
     cond = float(np.linalg.cond(m))
     rel = max(1e-12, SOLVE_FACTOR * EPS * cond)
     reason = _SOLVE.format(cond=cond)
-    lam_abs = rel * float(np.max(np.abs(reactions))) * float(
-        np.linalg.norm(np.linalg.inv(a_dc).T, np.inf))
+    lam_abs = 0.0
+    if a_dc.size:
+        lam_abs = rel * float(np.max(np.abs(reactions))) * float(
+            np.linalg.norm(np.linalg.inv(a_dc).T, np.inf))
     return {"free q_ddot": Tolerance(1e-12, rel, reason + " (m/s^2, rad/s^2)"),
             "constrained q_ddot": Tolerance(1e-12, rel, reason + " (m/s^2, rad/s^2)"),
             "reactions A^T lambda": Tolerance(1e-12, rel, reason + " (N, N m)"),
             "multipliers lambda": Tolerance(
                 max(1e-12, lam_abs), rel, reason + _MULTIPLIER.format(tol=lam_abs) +
-                " (N m for the dimensionless Phi_1, N for Phi_2 in m)")}
+                " (N or N m per unit of the constraint)")}
+
+
+def overrides(scenario) -> dict:
+    """{quantity: Tolerance} the scenario's model file sets for "pinocchio/<quantity>",
+    each with the file's reason."""
+    out = {}
+    for check, o in getattr(scenario, "tolerances", {}).items():
+        engine, _, quantity = check.partition("/")
+        if engine == ENGINE:
+            if quantity not in TOLERANCES and quantity not in SOLVED:
+                raise KeyError(f"scenario {scenario.name!r}: tolerance override {check!r} names "
+                               f"no compared quantity; have {sorted(TOLERANCES) + list(SOLVED)}")
+            out[quantity] = Tolerance(o.abs, o.rel, f"model file: {o.reason}")
+    return out
 
 
 @dataclass(frozen=True)
 class ModelCase:
     """One gpme system and its Pinocchio counterpart.
 
-    label  : model column of the report, e.g. "crane_flexible_n3 (URDF)"
-    system : gpme_core.gpme.ProgrammedMotion (dependent coordinates fixed)
-    pin    : crosscheck.pinocchio.model.PinocchioSystem
+    label     : model column of the report, e.g. "crane_flexible_n3 (URDF)"
+    kind      : one of CASE_KINDS
+    scenario  : the scenario's name
+    system    : gpme_core.gpme.ProgrammedMotion (dependent coordinates fixed)
+    pin       : crosscheck.pinocchio.model.PinocchioSystem
+    references: the constraints derived independently (crosscheck.constraint_reference)
+    overrides : {quantity: Tolerance} from the model file
     """
 
     label: str
-    system: object
-    pin: object
+    kind: str
+    scenario: str
+    system: ProgrammedMotion
+    pin: PinocchioSystem
+    references: tuple
+    overrides: Mapping[str, Tolerance] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -136,84 +181,191 @@ class State:
 
     case: str
     t: float
-    q: np.ndarray
-    q_dot: np.ndarray
+    q: NDArray[np.float64]
+    q_dot: NDArray[np.float64]
 
 
 # --------------------------------------------------------------------------- states
-def crane_ranges(model, params=CraneParameters()):
-    """(q_lo (n,), q_hi (n,), q_dot_max (n,)) of the crane's working range (SI units).
+RFEM_ANGLE = 0.02         # rad, RFEM angles drawn within +-this of their spring reference
+RFEM_RATE = 2.0           # rad/s
+RATE = 1.0                # rad/s or m/s, every other coordinate
+OPEN_REVOLUTE = np.pi     # rad around q0 where a revolute joint has no (finite) limit
+OPEN_PRISMATIC = 0.2      # m around q0 where a prismatic joint has no (finite) limit
 
-    z1 +-0.02 m (static sag ~0.01 m), psi2 +-pi, psi3 and z4 over their limits, RFEM
-    angles +-0.02 rad (static bending ~0.004 rad per element); rates z1 0.05 m/s,
-    psi2 1.5 rad/s, psi3 1 rad/s, z4 0.5 m/s, RFEM 2 rad/s (runs reach ~0.3 rad/s).
+
+def state_ranges(model: Model, flexible: Sequence[str] = (), q0: Optional[NDArray] = None):
+    """(lo (n,), hi (n,), rate (n,)) of the random states, SI units.
+
+    Finite limits: uniform inside them.  An open end: revolute q0 +- pi rad, prismatic
+    q0 +- 0.2 m (cut at the other end's finite limit).  RFEM coordinates (``flexible``):
+    spring reference +- 0.02 rad (static bending of the crane's arm ~0.004 rad per
+    element).  Rates +-1 rad/s or m/s, RFEM +-2 rad/s.
     """
-    fixed = {"z1": (-0.02, 0.02, 0.05), "psi2": (-np.pi, np.pi, 1.5),
-             "psi3": (*params.arm_pitch_range, 1.0), "z4": (*params.slider_stroke, 0.5)}
-    rows = [fixed.get(name, (-0.02, 0.02, 2.0)) for name in model.coordinate_names]
-    lo, hi, rate = (np.array(c, dtype=float) for c in zip(*rows))
+    n = model.n_coordinates
+    q0 = np.zeros(n) if q0 is None else np.asarray(q0, dtype=float)
+    lo, hi = model.lower_limits.copy(), model.upper_limits.copy()
+    half = np.where(model.is_revolute, OPEN_REVOLUTE, OPEN_PRISMATIC)
+    rate = np.full(n, RATE)
+    flex = np.array([name in set(flexible) for name in model.coordinate_names], dtype=bool)
+    centre = np.where(flex, model.spring_reference, q0)
+    half = np.where(flex, RFEM_ANGLE, half)
+    rate[flex] = RFEM_RATE
+    open_lo, open_hi = ~np.isfinite(lo) | flex, ~np.isfinite(hi) | flex
+    lo = np.where(open_lo, np.maximum(centre - half, lo), lo)
+    hi = np.where(open_hi, np.minimum(centre + half, hi), hi)
+    bad = [model.coordinate_names[k] for k in np.flatnonzero(~(lo < hi))]
+    if bad:
+        raise ValueError(f"{model.name}: empty sampling range for {bad} (q0 outside its "
+                         "limits?)")
     return lo, hi, rate
 
 
-def random_states(system, count, rng, t_max=10.0):
-    """``count`` seeded random states in the working range where the GPME is solvable
-    (a draw with a singular dependent block is replaced by the next draw)."""
-    lo, hi, rate = crane_ranges(system.model)
-    out, draws = [], 0
+def random_states(system: ProgrammedMotion, count: int, rng: np.random.Generator,
+                  t_max: float, flexible: Sequence[str] = (), q0: Optional[NDArray] = None,
+                  max_draws: Optional[int] = None) -> list:
+    """``count`` seeded random states (:func:`state_ranges`, t uniform in [0, t_max] s)
+    where the GPME is solvable; a draw with a singular dependent block is replaced by
+    the next draw, at most ``max_draws`` (default 20 count + 20) draws in all."""
+    lo, hi, rate = state_ranges(system.model, flexible, q0)
+    max_draws = 20 * count + 20 if max_draws is None else max_draws
+    out, draws, last = [], 0, ""
     while len(out) < count:
+        if draws >= max_draws:
+            raise ConstraintError(f"{system.model.name}: only {len(out)} of {count} random "
+                                  f"states are solvable after {draws} draws (last: {last}); "
+                                  "the constraints are singular over most of the sampling "
+                                  "range (state_ranges)")
         draws += 1
-        if draws > 20 * count:
-            raise ConstraintError(f"{system.model.name}: fewer than {count} solvable random "
-                                  f"states in {draws} draws")
         t = float(rng.uniform(0.0, t_max))
         q = rng.uniform(lo, hi)
         q_dot = rng.uniform(-rate, rate)
         try:
             system.solve(t, q, q_dot)
-        except ConstraintError:
+        except ConstraintError as exc:
+            last = str(exc)[:200]
             continue
-        out.append(State(f"random {len(out):02d}", t, q, q_dot))
+        out.append(State(f"random {len(out):03d}", t, q, q_dot))
     return out
 
 
-def run_states(system, count, t_end):
-    """``count`` states along a Radau run of ``system`` from the paper's initial state.
+def run_states(system: ProgrammedMotion, count: int, t_end: float, q0: NDArray,
+               q_dot0: NDArray) -> list:
+    """``count`` states evenly spaced along a Radau run of ``system`` from (q0, q_dot0).
 
     Radau with rtol 1e-4: only realistic states are needed here, not an accurate run,
-    and the RFEM arm's torsion modes (~1e6 rad/s) make explicit integrators crawl.
+    and RFEM torsion modes (~1e6 rad/s) make explicit integrators crawl.
     """
-    q0, qd0 = initial_state(system.model)
-    df = simulate(system, t_end, q0, qd0, method="Radau", output_dt=t_end / count,
+    df = simulate(system, t_end, q0, q_dot0, method="Radau", output_dt=t_end / count,
                   rtol=1e-4, atol=1e-6)
     names = list(system.model.coordinate_names)
     rows = np.linspace(0, len(df) - 1, count).round().astype(int)
-    return [State(f"run t={df['t'].iloc[r]:.3f}", float(df["t"].iloc[r]),
+    return [State(f"run t={df['t'].iloc[r]:.4f}", float(df["t"].iloc[r]),
                   df[names].iloc[r].to_numpy(float),
                   df[[f"{n}_dot" for n in names]].iloc[r].to_numpy(float)) for r in rows]
 
 
+@dataclass(frozen=True)
+class RunPlan:
+    """How much to compare per model: random states, states along a run of t_run s.
+    Scaled down for large models by :func:`state_counts`."""
+
+    n_random: int
+    n_run: int
+    t_run: float
+
+
+FULL = RunPlan(n_random=300, n_run=100, t_run=1.0)
+QUICK = RunPlan(n_random=3, n_run=2, t_run=0.05)
+# The full plan's counts hold up to N_FULL coordinates (the crane with 10 RFEM segments,
+# n = 34, ~2 ms per state and case); above, the cost of one state grows ~n^2 (trace-form
+# M and h) and the counts shrink as (N_FULL / n)^2, never below MIN_RANDOM + MIN_RUN.
+N_FULL = 34
+MIN_RANDOM, MIN_RUN = 30, 10
+
+
+def state_counts(plan: RunPlan, n: int) -> tuple:
+    """(random states, run states) of ``plan`` for a model with n coordinates."""
+    if n <= N_FULL:
+        return plan.n_random, plan.n_run
+    f = (N_FULL / n) ** 2
+    return (max(min(plan.n_random, MIN_RANDOM), round(plan.n_random * f)),
+            max(min(plan.n_run, MIN_RUN), round(plan.n_run * f)))
+
+
+def scenario_seed(name: str) -> int:
+    """Seed of a scenario's random states: SEED and a CRC of its name, so that adding a
+    scenario changes no other's states."""
+    return zlib.crc32(name.encode("utf-8")) ^ SEED
+
+
+def scenario_states(scenario, plan: RunPlan) -> list:
+    """Random and run states of ``scenario`` under ``plan``."""
+    system = scenario.system
+    if system.dependent is None:
+        system.choose_dependent(0.0, scenario.q0, scenario.q_dot0)
+    n_random, n_run = state_counts(plan, system.model.n_coordinates)
+    rng = np.random.default_rng(scenario_seed(scenario.name))
+    states = random_states(system, n_random, rng, scenario.t_end, scenario.flexible_coordinates,
+                           scenario.q0)
+    t_run = min(plan.t_run, scenario.t_end)
+    return states + run_states(system, n_run, t_run, scenario.q0, scenario.q_dot0)
+
+
 # --------------------------------------------------------------------------- cases
-def crane_case(n_rfe, params=CraneParameters()):
-    """The crane built directly in gpme and in Pinocchio (pinocchio_model.from_gpme)."""
-    system = crane_system(n_rfe, params)
-    return ModelCase(system.model.name, system, from_gpme(system.model))
+def _case(label, kind, scenario, system, pin_system):
+    refs = tuple(reference_constraints(system.constraint_specs, system.model.coordinate_names))
+    return ModelCase(label, kind, scenario.name, system, pin_system, refs, overrides(scenario))
 
 
-def urdf_case(n_rfe, urdf_dir, params=CraneParameters()):
-    """The crane written to URDF, read back by gpme_io.urdf (gpme) and by Pinocchio."""
-    original = crane_system(n_rfe, params).model
-    path, _ = write_urdf(original, Path(urdf_dir) / f"{original.name}.urdf")
-    model = read_urdf(path)
-    system = ProgrammedMotion(model, crane_constraints(params), dependent=("psi3", "z4"),
-                              baumgarte=(params.baumgarte_alpha, params.baumgarte_beta))
+def direct_case(scenario) -> ModelCase:
+    """The scenario's gpme system against a pin.Model built from it (model.from_gpme)."""
+    return _case(scenario.name, "direct", scenario, scenario.system,
+                 from_gpme(scenario.system.model))
+
+
+def urdf_case(scenario, urdf_dir: Path) -> ModelCase:
+    """The scenario's model written to urdf_dir/<name>.urdf, read back by gpme_io.urdf
+    (gpme) and by Pinocchio's parser."""
+    original = scenario.system
+    path = Path(urdf_dir) / f"{scenario.name}.urdf"
+    try:
+        write_urdf(original.model, path)
+        model = read_urdf(path)
+    except Exception as exc:
+        raise type(exc)(f"scenario {scenario.name!r}: URDF round trip: {exc}") from exc
+    system = ProgrammedMotion(model, original.constraint_specs, dependent=original.dependent,
+                              baumgarte=(original.alpha, original.beta),
+                              damping_form=original.damping_form)
     pin_sys = from_urdf(path, model.coordinate_names, [lk.name for lk in model.links],
                         list(model.frames))
-    return ModelCase(f"{model.name} (URDF)", system, pin_sys)
+    return _case(f"{scenario.name} (URDF)", "URDF", scenario, system, pin_sys)
+
+
+def original_urdf_case(scenario) -> Optional[ModelCase]:
+    """Pinocchio's reduction of the user's URDF against the scenario's gpme system, or
+    None when the scenario has no URDF or has flexible links (Pinocchio cannot read an
+    RFEM link from the user's URDF)."""
+    if scenario.urdf is None or scenario.model.flexible_links:
+        return None
+    model = scenario.system.model
+    pin_sys = from_original_urdf(scenario.urdf, model.coordinate_names,
+                                 [lk.name for lk in model.links], list(model.frames),
+                                 scenario.frozen, model.gravity, model.stiffness,
+                                 model.spring_reference)
+    return _case(f"{scenario.name} (original URDF)", "original URDF", scenario,
+                 scenario.system, pin_sys)
+
+
+def model_cases(scenario, urdf_dir: Path) -> list:
+    """The model cases of ``scenario`` (direct, URDF, original URDF when it applies)."""
+    cases = [direct_case(scenario), urdf_case(scenario, urdf_dir)]
+    original = original_urdf_case(scenario)
+    return cases + ([original] if original is not None else [])
 
 
 # --------------------------------------------------------------------------- one state
 def _crba(pm, data, q):
-    """(M (n, n), whole) from pin.crba; older Pinocchio filled only the upper triangle, so
+    """(M (nv, nv), whole) from pin.crba; older Pinocchio filled only the upper triangle, so
     an empty strict lower triangle is mirrored from the upper one (whole = False)."""
     m = np.array(pin.crba(pm, data, q))
     n = m.shape[0]
@@ -222,68 +374,68 @@ def _crba(pm, data, q):
     return m, True
 
 
-def _point_constraints(system):
-    bad = [type(b.spec).__name__ for b in system.bound if not isinstance(b.spec, PointConstraint)]
-    if bad:
-        raise TypeError(f"the Pinocchio crosscheck handles point constraints only, got {bad}")
-    frames = {b.spec.frame for b in system.bound}
-    if len(frames) != 1:
-        raise TypeError(f"the Pinocchio crosscheck needs all constraints on one frame, got {frames}")
-    return frames.pop()
-
-
-def compare_state(case, state):
+def compare_state(case: ModelCase, state: State) -> list:
     """Tidy rows (list of dict) comparing every term of ``case`` at ``state``."""
     system, ps = case.system, case.pin
     model, pm = system.model, ps.model
     data = pm.createData()
     t, q, qd = state.t, state.q, state.q_dot
-    n = model.n_coordinates
     coords = list(model.coordinate_names)
     rows = []
-
-    tolerances = dict(TOLERANCES)
+    tolerances = {**TOLERANCES, **case.overrides}
 
     def add(quantity, gpme_value, engine_value, labels=None):
         rows.append(compare(ENGINE, case.label, quantity, state.case, gpme_value, engine_value,
-                            tolerances[quantity], labels))
+                            tolerance_for(tolerances, quantity, case.label), labels))
 
     # ---- gpme
     kin = chain_kinematics(model, q)
     sol = system.solve(t, q, qd)
     terms = sol.terms
     free = ProgrammedMotion(model).solve(t, q, qd).q_ddot
-    frame_name = _point_constraints(system)
-    fr = model.frame(frame_name)
-    pk = point_kinematics(model, kin, qd, fr.link_index, fr.transform[:3, 3])
 
-    # ---- Pinocchio: kinematics with a = 0 (classical acceleration = drift)
-    m_pin, _ = _crba(pm, data, q)
-    pin.forwardKinematics(pm, data, q, qd, np.zeros(n))
+    # ---- Pinocchio: Jacobians, then kinematics with a = 0 (classical acceleration = drift)
+    q_p, v_p = ps.q_pin(q), ps.to_pin(qd)
+    m_pin, _ = _crba(pm, data, q_p)
+    m_pin = m_pin[np.ix_(ps.v_index, ps.v_index)]
+    pin.computeJointJacobians(pm, data, q_p)
+    pin.forwardKinematics(pm, data, q_p, v_p, np.zeros(pm.nv))
     pin.updateFramePlacements(pm, data)
     names = [lk.name for lk in model.links] + list(model.frames)
     fids = list(ps.link_frames) + [ps.frames[f] for f in model.frames]
     gpme_poses = np.concatenate([kin.T, [kin.T[f.link_index] @ f.transform
                                          for f in model.frames.values()]])
     pin_poses = np.array([data.oMf[i].homogeneous for i in fids])
-    add("pose position", gpme_poses[:, :3, 3], pin_poses[:, :3, 3], (names, ["x", "y", "z"]))
+    xyz = ["x", "y", "z"]
+    add("pose position", gpme_poses[:, :3, 3], pin_poses[:, :3, 3], (names, xyz))
     rot_labels = [f"R{i}{j}" for i in range(3) for j in range(3)]
     add("pose rotation", gpme_poses[:, :3, :3].reshape(-1, 9), pin_poses[:, :3, :3].reshape(-1, 9),
         (names, rot_labels))
-    fid = ps.frames[frame_name]
-    p_pin = data.oMf[fid].translation.copy()
-    v_pin = pin.getFrameVelocity(pm, data, fid, LWA).linear.copy()
-    drift_pin = pin.getFrameClassicalAcceleration(pm, data, fid, LWA).linear.copy()
-    jac_pin = pin.computeFrameJacobian(pm, data, q, fid, LWA)[:3].copy()
-    xyz = ["x", "y", "z"]
-    add("E position", pk.position, p_pin, xyz)
-    add("E velocity", pk.velocity, v_pin, xyz)
-    add("E jacobian", pk.jacobian, jac_pin, (xyz, coords))
-    add("E drift", pk.drift, drift_pin, xyz)
+
+    point = {}
+    for name in model.frames:
+        fid = ps.frames[name]
+        point[name] = (data.oMf[fid].translation.copy(),
+                       pin.getFrameVelocity(pm, data, fid, LWA).linear.copy(),
+                       ps.columns_to_gpme(pin.getFrameJacobian(pm, data, fid, LWA)[:3]),
+                       pin.getFrameClassicalAcceleration(pm, data, fid, LWA).linear.copy())
+    if model.frames:
+        frames = list(model.frames)
+        pks = [point_kinematics(model, kin, qd, model.frames[f].link_index,
+                                model.frames[f].transform[:3, 3]) for f in frames]
+        rows_xyz = [f"{f}.{c}" for f in frames for c in xyz]
+        add("frame position", [pk.position for pk in pks], [point[f][0] for f in frames],
+            (frames, xyz))
+        add("frame velocity", [pk.velocity for pk in pks], [point[f][1] for f in frames],
+            (frames, xyz))
+        add("frame jacobian", np.concatenate([pk.jacobian for pk in pks]),
+            np.concatenate([point[f][2] for f in frames]), (rows_xyz, coords))
+        add("frame drift", [pk.drift for pk in pks], [point[f][3] for f in frames],
+            (frames, xyz))
 
     # ---- Pinocchio: dynamics terms
-    g_pin = np.array(pin.computeGeneralizedGravity(pm, data, q))
-    h_pin = -(np.array(pin.rnea(pm, data, q, qd, np.zeros(n))) - g_pin)
+    g_pin = ps.to_gpme(pin.computeGeneralizedGravity(pm, data, q_p))
+    h_pin = -(ps.to_gpme(pin.rnea(pm, data, q_p, v_p, np.zeros(pm.nv))) - g_pin)
     add("M", terms.M, m_pin, (coords, coords))
     add("g", terms.g, g_pin, coords)
     add("h", terms.h, h_pin, coords)
@@ -291,50 +443,45 @@ def compare_state(case, state):
     tau_pin = ps.applied_forces(q, qd, model.drive_forces(t))
     add("applied tau", tau_gpme, tau_pin, coords)
 
-    # ---- constraints at Pinocchio's E state, and the constrained dynamics
+    # ---- constraints from the independent reference at Pinocchio's frame states
     m_c = system.n_constraints
-    phi, phi_dot, kappa = np.empty(m_c), np.empty(m_c), np.empty(m_c)
-    a_pin = np.empty((m_c, n))
-    for k, b in enumerate(system.bound):
-        f, grad, hess, f_t, grad_t, f_tt = b.spec.local_terms(p_pin, t)
-        phi[k], a_pin[k] = f, grad @ jac_pin
-        phi_dot[k] = float(grad @ v_pin) + f_t
-        kappa[k] = float(grad @ drift_pin + v_pin @ hess @ v_pin + 2.0 * grad_t @ v_pin + f_tt)
+    a_free = ps.to_gpme(pin.aba(pm, data, q_p, v_p, ps.to_pin(tau_pin)))
+    if m_c == 0:
+        tolerances.update({**solve_tolerances(m_pin, np.zeros(len(q)), np.zeros((0, 0))),
+                           **case.overrides})
+        add("free q_ddot", free, a_free, coords)
+        return rows
+    phi, phi_dot, a_pin, kappa = evaluate_reference(case.references, t, q, qd, point.__getitem__)
     cons = list(system.constraint_names)
     add("Phi", sol.phi, phi, cons)
     add("Phi_dot", sol.phi_dot, phi_dot, cons)
     add("constraint jacobian A", sol.jacobian, a_pin, (cons, coords))
     add("constraint kappa", sol.kappa, kappa, cons)
     gamma = kappa + 2.0 * system.alpha * phi_dot + system.beta ** 2 * phi
-    a_con = np.array(pin.forwardDynamics(pm, data, q, qd, tau_pin, a_pin, gamma))
+    a_con = ps.to_gpme(pin.forwardDynamics(pm, data, q_p, v_p, ps.to_pin(tau_pin),
+                                           ps.to_pin(a_pin.T).T, gamma))
     lam = np.array(data.lambda_c).copy()
-    tolerances.update(solve_tolerances(m_pin, a_pin.T @ lam, a_pin[:, system.dc]))
-    add("free q_ddot", free, np.array(pin.aba(pm, data, q, qd, tau_pin)), coords)
+    tolerances.update({**solve_tolerances(m_pin, a_pin.T @ lam, a_pin[:, system.dc]),
+                       **case.overrides})
+    add("free q_ddot", free, a_free, coords)
     add("constrained q_ddot", sol.q_ddot, a_con, coords)
     add("multipliers lambda", sol.multipliers, lam, cons)
     add("reactions A^T lambda", sol.reaction_forces, a_pin.T @ lam, coords)
     return rows
 
 
-def compare_case(case, states):
+def compare_case(case: ModelCase, states: Sequence[State]) -> pd.DataFrame:
     """Tidy DataFrame of every comparison of ``case`` over ``states``."""
     return pd.DataFrame([row for s in states for row in compare_state(case, s)])
 
 
 # --------------------------------------------------------------------------- the run
-@dataclass(frozen=True)
-class RunPlan:
-    """How much to compare: number of random and run states, run length (s), which
-    crane cases are also round-tripped through URDF."""
-
-    n_random: int
-    n_run: int
-    t_run: float
-    urdf_segments: tuple
-
-
-FULL = RunPlan(n_random=300, n_run=100, t_run=1.0, urdf_segments=CRANE_SEGMENTS)
-QUICK = RunPlan(n_random=3, n_run=2, t_run=0.05, urdf_segments=(0, 3))
+def default_scenarios(quick: bool = False) -> list:
+    """The paper's crane, rigid and with 1, 3, 10 RFEM segments (gpme_io.scenario.crane_scenario),
+    the scenarios `gpme verify` checks when no model file is given (quick or not: the
+    state counts, not the models, make the quick run quick)."""
+    from gpme_io.scenario import crane_scenario
+    return [crane_scenario(n) for n in (0, 1, 3, 10)]
 
 
 def _progress(enabled, total):
@@ -344,72 +491,118 @@ def _progress(enabled, total):
         from tqdm import tqdm
     except ImportError:
         return None
-    return tqdm(total=total, desc="pinocchio crosscheck", unit="model")
+    return tqdm(total=total, desc="pinocchio crosscheck", unit="scenario")
 
 
-def _crba_whole():
-    """True when this Pinocchio's crba fills the whole matrix (checked on the crane)."""
-    case = crane_case(0)
-    data = case.pin.model.createData()
-    q = np.array([0.01, 0.3, 0.5, 0.1])
-    return _crba(case.pin.model, data, q)[1]
+@dataclass(frozen=True)
+class CaseRecord:
+    """What the report says about one model case besides its rows."""
+
+    label: str
+    kind: str
+    scenario: str
+    n: int
+    nq_pin: int
+    n_states: int
+    crba_whole: bool
+    notes: tuple
 
 
-def run(out_dir: Path, quick: bool = False, progress: bool = False) -> pd.DataFrame:
-    """Compare gpme with Pinocchio term by term; write out_dir/pinocchio.csv and .html.
+def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False,
+        progress: bool = False, sections: Sequence[str] = SECTIONS) -> pd.DataFrame:
+    """Compare gpme with Pinocchio for every scenario; write out_dir/pinocchio.csv and
+    out_dir/pinocchio.html (atomically) and return the tidy table (columns of
+    crosscheck.compare.COLUMNS plus ``section``; one row per quantity, model case and state).
 
-    Returns the tidy table (one row per quantity, model and state; column ``passed``).
-    quick: a reduced set of states and URDF cases (seconds, for CI).
+    scenarios: gpme_io.scenario.Scenario objects; None: default_scenarios(quick) (the crane).
+    quick    : QUICK plan (3 random + 2 run states per model) instead of FULL.
+    sections : "terms" (this module) and/or "runs" (crosscheck.pinocchio.runs.run_section).
     """
+    unknown = sorted(set(sections) - set(SECTIONS))
+    if unknown:
+        raise ValueError(f"unknown sections {unknown}; choose from {SECTIONS}")
+    scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
     out_dir = Path(out_dir)
     plan = QUICK if quick else FULL
     start = time.perf_counter()
-    rng = np.random.default_rng(SEED)
-    frames = []
-    bar = _progress(progress, len(CRANE_SEGMENTS) + len(plan.urdf_segments))
-    for n in CRANE_SEGMENTS:
-        case = crane_case(n)
-        states = random_states(case.system, plan.n_random, rng) + \
-            run_states(case.system, plan.n_run, plan.t_run)
-        frames.append(compare_case(case, states))
+    frames, records, skipped = [], [], []
+    bar = _progress(progress, len(scenarios))
+    for scenario in scenarios:
+        if "terms" in sections:
+            cases = model_cases(scenario, out_dir / "urdf")
+            if scenario.urdf is not None and len(cases) < 3:
+                skipped.append(f"{scenario.name}: no original-URDF case (the model has "
+                               "flexible links, which the user's URDF does not describe)")
+            states = scenario_states(scenario, plan)
+            for case in cases:
+                if case.system.model.coordinate_names != scenario.model.coordinate_names:
+                    raise ValueError(f"{case.label}: coordinates "
+                                     f"{case.system.model.coordinate_names} differ from the "
+                                     f"scenario's {scenario.model.coordinate_names}")
+                df = compare_case(case, states)
+                frames.append(df.assign(section="terms"))
+                data = case.pin.model.createData()
+                records.append(CaseRecord(
+                    case.label, case.kind, scenario.name, case.system.model.n_coordinates,
+                    case.pin.model.nq, len(states),
+                    _crba(case.pin.model, data, case.pin.q_pin(states[0].q))[1],
+                    case.pin.notes))
+                log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
+                         int((~df["passed"]).sum()))
+        if "runs" in sections:
+            from .runs import run_section
+            rows = run_section(scenario, quick, log.info)
+            frames.append(pd.DataFrame(rows).assign(
+                section=[r.get("section", "runs") for r in rows]))
         if bar:
             bar.update()
-        if n in plan.urdf_segments:
-            frames.append(compare_case(urdf_case(n, out_dir / "urdf"), states))
-            if bar:
-                bar.update()
     if bar:
         bar.close()
-    df = pd.concat(frames, ignore_index=True)
+    df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     wall = time.perf_counter() - start
+    out_dir.mkdir(parents=True, exist_ok=True)
     report.write_csv(df, out_dir / "pinocchio.csv")
-    report.atomic_write_text(out_dir / "pinocchio.html", _html(df, wall, quick))
+    report.atomic_write_text(out_dir / "pinocchio.html",
+                             _html(df, records, skipped, wall, quick))
     return df
 
 
-def _html(df, wall, quick):
-    n_fail = int((~df["passed"]).sum())
-    summary = report.summarise(df)
-    n_states = df.groupby("model")["case"].nunique()
-    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} comparisons FAIL"
-    crba = ("pin.crba returned the whole symmetric matrix" if _crba_whole() else
-            "pin.crba filled only the upper triangle; it was mirrored before comparing")
+def _html(df, records, skipped, wall, quick):
+    esc = html.escape
+    if df.empty:
+        return report.html_page("gpme vs Pinocchio", "<h1>gpme vs Pinocchio: nothing compared</h1>")
+    summary = report.summarise(df, keys=("section", "model", "quantity"))
+    n_fail = int((summary["status"] == "fail").sum())
+    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
+    crba = ("pin.crba returned the whole symmetric matrix" if all(r.crba_whole for r in records)
+            else "pin.crba filled only the upper triangle for some models; it was mirrored "
+                 "before comparing")
+    case_rows = "".join(
+        f"<tr><td class='l'>{esc(r.label)}</td><td class='l'>{esc(r.kind)}</td>"
+        f"<td>{r.n}</td><td>{r.nq_pin}</td><td>{r.n_states}</td>"
+        f"<td class='l'>{'<br>'.join(esc(x) for x in r.notes)}</td></tr>" for r in records)
+    cases = ("<table><thead><tr><th class='l'>model case</th><th class='l'>kind</th>"
+             "<th>n (gpme)</th><th>nq (Pinocchio)</th><th>states</th><th class='l'>"
+             "Pinocchio side</th></tr></thead><tbody>" + case_rows + "</tbody></table>")
+    skipped_html = "".join(f"<li>{esc(s)}</li>" for s in skipped)
     body = (
-        f"<h1>gpme vs Pinocchio {pin.__version__}: {status}</h1>"
-        f"<p>{len(df)} comparisons over {len(n_states)} model cases "
-        f"({', '.join(f'{m}: {k} states' for m, k in n_states.items())}); "
-        f"{'quick' if quick else 'full'} run, {wall:.1f} s. {crba}.</p>"
-        "<p>Conventions: gpme M q&#776; = h + Q + A<sup>T</sup>&lambda;, Q = -(g + d + f) + t; "
+        f"<h1>gpme vs Pinocchio {esc(pin.__version__)}: {esc(status)}</h1>"
+        f"<p>{len(df)} comparisons over {len(records)} model cases; "
+        f"{'quick' if quick else 'full'} run, {wall:.1f} s. {esc(crba)}.</p>"
+        "<h2>Model cases</h2>" + cases
+        + (f"<ul>{skipped_html}</ul>" if skipped_html else "")
+        + "<p>Conventions: gpme M q&#776; = h + Q + A<sup>T</sup>&lambda;, Q = -(g + d + f) + t; "
         "Pinocchio M a + b = &tau; + J<sup>T</sup>&lambda;<sub>c</sub>, J a + &gamma; = 0. "
         "Compared: g with computeGeneralizedGravity, h with -(rnea(q, v, 0) - g), "
-        "&tau; = -K(q - q<sub>ref</sub>) - D v + t (Pinocchio side: URDF damping, side-file "
-        "springs), &gamma; = &kappa; + 2&alpha;&Phi;&#775; + &beta;<sup>2</sup>&Phi;. "
-        "Errors are normwise: abs = max|x - y|, rel = abs / max|y|; pass when "
-        "abs &le; tol_abs + tol_rel max|y|.</p>"
+        "&tau; = -K(q - q<sub>ref</sub>) - D v + t, &gamma; = &kappa; + 2&alpha;&Phi;&#775; + "
+        "&beta;<sup>2</sup>&Phi;; the constraint terms on the Pinocchio side come from SymPy "
+        "derivatives of the task expressions at Pinocchio's frame states. Errors are "
+        "normwise: abs = max|x - y|, rel = abs / max|y|; pass when abs &le; tol_abs + tol_rel "
+        "max|y|; info rows have no finite tolerance and are never counted as passes.</p>"
         "<h2>Worst cases</h2>"
         + report.html_table(report.worst_first(df).head(40), left_columns=(
-            "model", "quantity", "case", "entry", "reason"))
+            "section", "model", "quantity", "case", "entry", "reason"))
         + "<h2>Summary per model and quantity</h2>"
-        + report.html_table(summary, left_columns=("engine", "model", "quantity", "worst_case",
+        + report.html_table(summary, left_columns=("section", "model", "quantity", "worst_case",
                                                    "worst_entry", "reason")))
     return report.html_page("gpme vs Pinocchio", body)

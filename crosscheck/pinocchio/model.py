@@ -1,29 +1,37 @@
-"""A Pinocchio model of a gpme model, built directly or from its URDF, and frame lookups.
+"""A Pinocchio model of a gpme model, built three ways, with the map between their coordinates.
 
-Two builders, so that both the gpme -> Pinocchio mapping and the URDF path are checked:
+Three builders, from the least to the most independent of gpme:
 
-* :func:`from_gpme`  builds a ``pin.Model`` joint by joint from a gpme Model: joint k
+* :func:`from_gpme` builds a ``pin.Model`` joint by joint from a gpme Model: joint k
   becomes Pinocchio joint k + 1 (0 is the universe), with placement ``Joint.origin``, a
   revolute/prismatic joint about/along ``Joint.axis`` (RX/RY/RZ, PX/PY/PZ when the axis
   is a coordinate axis, the unaligned joint otherwise, as Pinocchio's URDF parser does),
   the link inertia appended at the joint frame, and every gpme frame as an OP_FRAME;
-* :func:`from_urdf`  reads a URDF with Pinocchio's own parser (inertias, origins, axes,
-  damping from <dynamics>) and the gpme side file beside it (stiffness, spring
-  references, gravity, which Pinocchio does not hold).
+* :func:`from_urdf` reads the URDF that gpme_io.urdf.write_urdf wrote, with Pinocchio's
+  own parser (inertias, origins, axes, damping from <dynamics>) and the gpme side file
+  beside it (stiffness, spring references, gravity, which Pinocchio does not hold);
+* :func:`from_original_urdf` reads the *user's* URDF (the whole tree) with Pinocchio's
+  parser and locks every joint that is not one of the gpme model's coordinates with
+  Pinocchio's own ``buildReducedModel`` at the frozen values: the reduction of the tree
+  to the chain (which gpme's reader does by merging inertias) is done by Pinocchio.
 
-Both return a :class:`PinocchioSystem` that also carries the generalized springs and
-dampers of the Pinocchio side, so that the applied joint forces passed to Pinocchio
-(tau = -K (q - q_ref) - D q_dot + drives) are formed from this side's own data.
-Pinocchio's joint frame after the motion is the gpme link frame (same convention:
-T_parent_child = origin @ motion(q)).
+All return a :class:`PinocchioSystem`, which maps gpme's coordinate order to Pinocchio's
+configuration (q, nq entries) and velocity (v, nv = n entries) vectors: a continuous
+(unbounded revolute) joint has nq = 2 in Pinocchio, (cos q, sin q), and nv = 1.  It also
+carries the generalized springs and dampers of the Pinocchio side, so that the applied
+joint forces passed to Pinocchio (tau = -K (q - q_ref) - D q_dot + drives) are formed
+from this side's data.  Pinocchio's joint frame after the motion is the gpme link frame
+(same convention: T_parent_child = origin @ motion(q)).
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Optional, Sequence
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from gpme_core.errors import ModelFileError
-
 from gpme_io.urdf import load_side_file, side_file_path
 
 _AXES = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
@@ -33,27 +41,69 @@ _AXES = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
 class PinocchioSystem:
     """A pin.Model matched to a gpme model's coordinates, links and frames.
 
-    model           : pin.Model, nq = nv = n, joint k + 1 <-> gpme coordinate k
-    link_frames     : (n,) Pinocchio frame ids of the gpme links (the joint frames)
+    model           : pin.Model with nv = n (n = gpme coordinates)
+    link_frames     : (n,) Pinocchio frame ids of the gpme links, in gpme link order
     frames          : {gpme frame name: Pinocchio frame id}
-    stiffness       : (n,) N/m or N m/rad of the Pinocchio side (side file or gpme model)
+    stiffness       : (n,) N/m or N m/rad of the Pinocchio side, gpme coordinate order
     spring_reference: (n,) m or rad
-    damping         : (n,) N s/m or N m s/rad (pin.Model.damping)
-    source          : "gpme" (built directly) or "urdf" (Pinocchio's URDF parser)
+    damping         : (n,) N s/m or N m s/rad (pin.Model.damping), gpme coordinate order
+    source          : "gpme" (built directly), "urdf" (our URDF, Pinocchio's parser) or
+                      "original urdf" (the user's URDF, reduced by Pinocchio)
+    q_index         : (n,) Pinocchio idx_q of each gpme coordinate
+    v_index         : (n,) Pinocchio idx_v of each gpme coordinate
+    continuous      : (n,) True where Pinocchio holds (cos q, sin q) (nq = 2)
+    locked          : {URDF joint name: value (rad or m)} joints locked by buildReducedModel
+    notes           : what this side takes from where, one line each (for the report)
     """
 
     model: object
     link_frames: tuple
-    frames: dict
-    stiffness: np.ndarray
-    spring_reference: np.ndarray
-    damping: np.ndarray
+    frames: Mapping[str, int]
+    stiffness: NDArray[np.float64]
+    spring_reference: NDArray[np.float64]
+    damping: NDArray[np.float64]
     source: str
+    q_index: NDArray[np.int64]
+    v_index: NDArray[np.int64]
+    continuous: NDArray[np.bool_]
+    locked: Mapping[str, float] = field(default_factory=dict)
+    notes: tuple = ()
+
+    def q_pin(self, q: NDArray) -> NDArray:
+        """(nq,) Pinocchio configuration of the gpme coordinates q (n,) (rad, m)."""
+        q = np.asarray(q, dtype=float)
+        out = pin.neutral(self.model)
+        plain = ~self.continuous
+        out[self.q_index[plain]] = q[plain]
+        out[self.q_index[self.continuous]] = np.cos(q[self.continuous])
+        out[self.q_index[self.continuous] + 1] = np.sin(q[self.continuous])
+        return out
+
+    def to_pin(self, x: NDArray) -> NDArray:
+        """(nv, ...) a gpme-ordered velocity-like vector (or matrix rows) in Pinocchio order."""
+        x = np.asarray(x, dtype=float)
+        out = np.zeros((self.model.nv,) + x.shape[1:])
+        out[self.v_index] = x
+        return out
+
+    def to_gpme(self, x: NDArray) -> NDArray:
+        """(n,) a Pinocchio velocity-ordered vector in gpme coordinate order."""
+        return np.asarray(x, dtype=float)[self.v_index]
+
+    def columns_to_gpme(self, a: NDArray) -> NDArray:
+        """(..., n) columns of a Pinocchio Jacobian (..., nv) in gpme coordinate order."""
+        return np.asarray(a, dtype=float)[..., self.v_index]
 
     def applied_forces(self, q, q_dot, drives):
-        """(n,) tau = -K (q - q_ref) - D q_dot + drives, N or N m: the joint forces that
-        Pinocchio's M a + b = tau takes (gpme's Q without gravity, which Pinocchio adds)."""
+        """(n,) tau = -K (q - q_ref) - D q_dot + drives, N or N m, gpme order: the joint
+        forces that Pinocchio's M a + b = tau takes (gpme's Q without gravity, which
+        Pinocchio adds)."""
         return -self.stiffness * (q - self.spring_reference) - self.damping * q_dot + drives
+
+
+def _identity_map(n):
+    idx = np.arange(n)
+    return idx, idx.copy(), np.zeros(n, dtype=bool)
 
 
 def _joint_model(kind, axis):
@@ -66,7 +116,7 @@ def _joint_model(kind, axis):
         pin.JointModelPrismaticUnaligned(np.array(axis, dtype=float))
 
 
-def from_gpme(model):
+def from_gpme(model) -> PinocchioSystem:
     """:class:`PinocchioSystem` built joint by joint from the gpme ``model``."""
     pm = pin.Model()
     pm.name = model.name
@@ -88,10 +138,13 @@ def from_gpme(model):
                                              pin.SE3(fr.transform), pin.FrameType.OP_FRAME))
     pm.gravity = pin.Motion(np.asarray(model.gravity, dtype=float), np.zeros(3))
     return PinocchioSystem(pm, tuple(link_frames), frames, model.stiffness.copy(),
-                           model.spring_reference.copy(), np.array(pm.damping), "gpme")
+                           model.spring_reference.copy(), np.array(pm.damping), "gpme",
+                           *_identity_map(model.n_coordinates),
+                           notes=("pin.Model built joint by joint from the gpme model",))
 
 
-def from_urdf(urdf_path, coordinate_names, link_names, frame_names, side_file="auto"):
+def from_urdf(urdf_path, coordinate_names, link_names, frame_names,
+              side_file="auto") -> PinocchioSystem:
     """:class:`PinocchioSystem` from Pinocchio's URDF parser and the gpme side file.
 
     coordinate_names, link_names, frame_names: the gpme model's, to match the URDF joint,
@@ -116,6 +169,116 @@ def from_urdf(urdf_path, coordinate_names, link_names, frame_names, side_file="a
                           for n in coordinate_names])
     pm.gravity = pin.Motion(np.array(side.get("gravity", (0.0, 0.0, -9.81)), dtype=float),
                             np.zeros(3))
-    return PinocchioSystem(pm, tuple(pm.getFrameId(n) for n in link_names),
-                           {f: pm.getFrameId(f) for f in frame_names}, stiffness, reference,
-                           np.array(pm.damping), "urdf")
+    return PinocchioSystem(pm, tuple(_frame_id(pm, n) for n in link_names),
+                           {f: _frame_id(pm, f) for f in frame_names}, stiffness, reference,
+                           np.array(pm.damping), "urdf", *_identity_map(len(coordinate_names)),
+                           notes=(f"Pinocchio's URDF parser on {Path(urdf_path).name}; springs "
+                                  "and gravity from its side file",))
+
+
+def _frame_id(pm, name):
+    """Pinocchio frame id of link ``name``: its BODY frame (a URDF joint may share the name
+    of its child link; the joint frame then comes first in pm.frames)."""
+    if pm.existFrame(name, pin.FrameType.BODY):
+        return pm.getFrameId(name, pin.FrameType.BODY)
+    return pm.getFrameId(name)
+
+
+def _is_continuous(joint):
+    return joint.nq == 2 and joint.nv == 1
+
+
+def _lock_value(joint, value, name, problems):
+    """Pinocchio configuration entries (nq,) of a locked joint at ``value``."""
+    if joint.nq == 1 and joint.nv == 1:
+        return [float(value)]
+    if _is_continuous(joint):
+        return [np.cos(value), np.sin(value)]
+    problems.append(f"joint {name!r} ({joint.shortname()}, nq = {joint.nq}) cannot be frozen "
+                    f"at the single value {value!r}; only revolute, continuous and prismatic "
+                    "joints have one")
+    return None
+
+
+def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: Sequence[str],
+                       frame_names: Sequence[str], frozen: Mapping[str, float], gravity,
+                       stiffness, spring_reference) -> PinocchioSystem:
+    """:class:`PinocchioSystem` of the user's URDF, reduced to the gpme chain by Pinocchio.
+
+    urdf_path        : the user's URDF (whole tree); Pinocchio's parser reads it
+    coordinate_names : the gpme coordinates = the URDF joints kept moving (the chain)
+    link_names, frame_names : gpme link and frame names = URDF link names
+    frozen           : {URDF joint: value (rad or m)}; every other joint off the chain is
+                       locked at 0 (Pinocchio's neutral configuration for it)
+    gravity          : (3,) m/s^2, world frame (a URDF has none)
+    stiffness, spring_reference : (n,) gpme order; a URDF has no springs, so these come
+                       from the model file (the only terms not read by Pinocchio here)
+
+    Damping is Pinocchio's, read from <dynamics damping>.  ModelFileError lists every
+    mismatch (a coordinate, link or frame Pinocchio does not have, nv != n, a frozen joint
+    that is on the chain or not in the file).
+    """
+    full = pin.buildModelFromUrdf(str(urdf_path))
+    problems = []
+    names = list(full.names)[1:]
+    chain = list(coordinate_names)
+    absent = [c for c in chain if c not in names]
+    if absent:
+        problems.append(f"Pinocchio finds no joints {absent} in {urdf_path}; it has {names}")
+    on_chain = sorted(set(frozen) & set(chain))
+    if on_chain:
+        problems.append(f"joints {on_chain} are both frozen and gpme coordinates")
+    unknown = sorted(set(frozen) - set(names))
+    if unknown:
+        problems.append(f"frozen joints {unknown} are not joints of {urdf_path}")
+    q_ref = pin.neutral(full)
+    locked, lock_ids = {}, []
+    for name in names:
+        if name in chain:
+            continue
+        jid = full.getJointId(name)
+        joint = full.joints[jid]
+        value = float(frozen.get(name, 0.0))
+        entries = _lock_value(joint, value, name, problems)
+        if entries is not None:
+            q_ref[joint.idx_q:joint.idx_q + joint.nq] = entries
+        locked[name] = value
+        lock_ids.append(jid)
+    if problems:
+        raise ModelFileError([f"original URDF {urdf_path}: {p}" for p in problems])
+    pm = pin.buildReducedModel(full, lock_ids, q_ref) if lock_ids else full
+    q_index, v_index, continuous = [], [], []
+    for name in chain:
+        joint = pm.joints[pm.getJointId(name)]
+        if joint.nv != 1:
+            problems.append(f"joint {name!r} is a {joint.shortname()} with nv = {joint.nv}; "
+                            "a gpme coordinate needs nv = 1")
+        q_index.append(joint.idx_q)
+        v_index.append(joint.idx_v)
+        continuous.append(_is_continuous(joint))
+    if pm.nv != len(chain):
+        problems.append(f"after locking {sorted(locked)}, Pinocchio has nv = {pm.nv} "
+                        f"(nq = {pm.nq}) but gpme has n = {len(chain)} coordinates")
+    missing = [f for f in list(link_names) + list(frame_names) if not pm.existFrame(f)]
+    if missing:
+        problems.append(f"Pinocchio has no frames {missing}")
+    if problems:
+        raise ModelFileError([f"original URDF {urdf_path}: {p}" for p in problems])
+    pm.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
+    v_index = np.array(v_index, dtype=int)
+    n_cont = int(np.sum(continuous))
+    notes = [f"Pinocchio's URDF parser on the user's {Path(urdf_path).name} (nq = {full.nq}, "
+             f"nv = {full.nv}); buildReducedModel locked {len(locked)} joint(s): "
+             + (", ".join(f"{k} = {v:g}" for k, v in locked.items()) or "none")
+             + f"; reduced nq = {pm.nq}, nv = {pm.nv}",
+             "springs (stiffness, spring reference) and gravity from the model file (a URDF "
+             "has none); damping from the URDF's <dynamics damping> as Pinocchio read it"]
+    if n_cont:
+        notes.append(f"{n_cont} continuous joint(s) held as (cos q, sin q) in Pinocchio")
+    return PinocchioSystem(pm, tuple(_frame_id(pm, n) for n in link_names),
+                           {f: _frame_id(pm, f) for f in frame_names},
+                           np.asarray(stiffness, dtype=float).copy(),
+                           np.asarray(spring_reference, dtype=float).copy(),
+                           np.array(pm.damping)[v_index], "original urdf",
+                           np.array(q_index, dtype=int), v_index,
+                           np.array(continuous, dtype=bool), locked, tuple(notes))
