@@ -1,0 +1,340 @@
+"""Turn a parsed model file (gpme_io.modelfile.schema.ModelFile) into a
+gpme_io.scenario.Scenario.
+
+Steps: build the source model (the builtin crane, or the URDF through
+gpme_io.urdf_reader with the chain, frozen joints and flexible links); check every name
+the file uses against it (joints, frames, links, coordinates; :func:`reference_problems`);
+apply the [[joint]] springs and dampers, replace the drives by the file's [[drive]] list,
+name the links used as constraint frames; bind the constraints; place the initial state;
+choose the dependent coordinates and the RK4 step when the file leaves them out.
+Everything the file leaves to a default, and everything the reader left out, is a line of
+``Scenario.notes``.
+"""
+import difflib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
+                                   SympyPointConstraint)
+from gpme_core.errors import ConstraintError, ModelError, ModelFileError
+from gpme_core.gpme import ProgrammedMotion
+from gpme_core.integrate import rk4_stability_step, suggest_rk4_step
+from gpme_core.kinematics import chain_kinematics
+from gpme_core.model import Drive, Frame, Model, validate_model
+from gpme_core.statics import static_equilibrium
+from gpme_core.time_functions import SympyTimeFunction, Tabulated
+from gpme_io.scenario import Scenario
+
+from . import expressions as ex
+from .schema import (CoordinateConstraintSpec, CraneSource, EllipseConstraintSpec,
+                     ExpressionConstraintSpec, ModelFile, UrdfSource)
+
+STEP_SAFETY = 0.5       # fraction of the RK4 stability step used when dt is not given
+
+
+@dataclass(frozen=True)
+class SourceModel:
+    """The model built from the file's source, before the file's changes.
+
+    model  : gpme_core.model.Model
+    urdf   : the URDF read (None for builtin models)
+    chain  : (root link, tip link) used, or None;  frozen : {joint: rad or m}
+    notes  : what the reader left out or replaced, one line each
+    """
+
+    model: Model
+    urdf: Optional[Path] = None
+    chain: Optional[tuple] = None
+    frozen: tuple = ()
+    notes: tuple = ()
+
+
+# ====================================================================== the source model
+def build_source(spec: ModelFile) -> SourceModel:
+    """The source model of ``spec`` (raises ModelFileError with 'model...' key paths)."""
+    src = spec.model.source
+    if isinstance(src, CraneSource):
+        return _crane_model(spec)
+    return _urdf_model(spec, src)
+
+
+def _crane_model(spec: ModelFile) -> SourceModel:
+    from gpme_examples.crane import CraneParameters, build_crane
+    src = spec.model.source
+    params = CraneParameters(**{**dict(src.overrides), "gravity": tuple(spec.model.gravity)})
+    try:
+        model = build_crane(src.n_rfe, params, name=spec.model.name)
+    except ModelError as exc:
+        raise ModelFileError([f"model.crane: {p}" for p in exc.problems]) from None
+    return SourceModel(model, None, None, (), ())
+
+
+def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
+    chain = spec.chain
+    try:
+        from gpme_io.urdf_reader import FlexibleLink, load_urdf
+    except ImportError:
+        return _legacy_urdf_model(spec, src)
+    from gpme_core.rfem import BeamSection
+    problems = []
+    if chain is not None and (chain.root is None) != (chain.tip is None):
+        problems.append("chain: give both root and tip, or neither (then the whole URDF tree "
+                        "must be one serial chain)")
+    flexible = {}
+    for f in spec.flexible:
+        shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
+                  "rectangle": BeamSection.rectangle}
+        try:
+            section = shapes[f.section.shape](**dict(f.section.dimensions))
+            flexible[f.link] = FlexibleLink(
+                section, f.youngs_modulus, f.shear_modulus, f.density, f.segments,
+                bending_viscosity=f.bending_viscosity, torsion_viscosity=f.torsion_viscosity,
+                axis=f.axis, length=f.length, section_y_axis=f.section_y_axis)
+        except ModelError as exc:
+            problems += [f"{f.key}: {p}" for p in exc.problems]
+    if problems:
+        raise ModelFileError(problems)
+    ends = None if chain is None or chain.root is None else (chain.root, chain.tip)
+    try:
+        res = load_urdf(src.path, side_file=src.side_file, chain=ends,
+                        frozen=dict(chain.frozen) if chain is not None else {},
+                        flexible=flexible, gravity=tuple(spec.model.gravity),
+                        name=spec.model.name)
+    except ModelError as exc:
+        raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
+    return SourceModel(res.model, src.path, tuple(res.chain) if res.chain else None,
+                       tuple(dict(res.frozen).items()), tuple(res.notes))
+
+
+def _legacy_urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
+    """gpme_io.urdf.read_urdf, for as long as gpme_io.urdf_reader is not there: no chain
+    selection, no frozen joints, no flexible links."""
+    from gpme_io.urdf import read_urdf
+    problems = []
+    if spec.chain is not None:
+        problems.append("chain: choosing a chain or freezing joints needs gpme_io.urdf_reader")
+    if spec.flexible:
+        problems.append("flexible: flexible URDF links need gpme_io.urdf_reader")
+    if problems:
+        raise ModelFileError(problems)
+    try:
+        model = read_urdf(src.path, side_file=src.side_file, gravity=tuple(spec.model.gravity),
+                          name=spec.model.name)
+    except ModelError as exc:
+        raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
+    return SourceModel(model, src.path, None, (), ())
+
+
+# ====================================================================== name checks
+def _unknown(what: str, name: str, choices) -> str:
+    choices = list(choices)
+    close = difflib.get_close_matches(name, choices, n=1)
+    mean = f"did you mean {close[0]!r}? " if close else ""
+    shown = ", ".join(choices[:30]) + (f", ... ({len(choices)} in all)" if len(choices) > 30
+                                        else "")
+    return f"no {what} {name!r}; {mean}the model has: {shown}"
+
+
+def _flexible_coordinates(model: Model) -> dict:
+    """{coordinate name: flexible link name} of the RFEM coordinates."""
+    return {model.coordinate_names[k]: f.name for f in model.flexible_links
+            for k in f.joint_indices}
+
+
+def reference_problems(spec: ModelFile, model: Model) -> list:
+    """'key.path: message' for every name in ``spec`` the model does not have, and the
+    counts that do not fit it."""
+    out = []
+    coords = model.coordinate_names
+    flex = _flexible_coordinates(model)
+    rigid = [c for c in coords if c not in flex]
+    for j in spec.joints:
+        if j.name in flex:
+            out.append(f"{j.key}.name: {j.name!r} is an RFEM coordinate of flexible link "
+                       f"{flex[j.name]!r}; its spring and damper follow from the beam "
+                       "(youngs_modulus, shear_modulus, bending_viscosity in [[flexible]])")
+        elif j.name not in coords:
+            out.append(f"{j.key}.name: " + _unknown("joint", j.name, rigid))
+    for d in spec.drives:
+        if d.joint not in coords:
+            out.append(f"{d.key}.joint: " + _unknown("coordinate", d.joint, coords))
+    frames = sorted(model.frames) + [lk.name for lk in model.links if lk.name not in model.frames]
+    for c in spec.constraints:
+        if c.frame not in frames:
+            out.append(f"{c.key}.frame: " + _unknown("frame or link", c.frame, frames))
+    for p in spec.programmes:
+        if p.joint not in coords:
+            out.append(f"{p.key}.joint: " + _unknown("coordinate", p.joint, coords))
+    m = spec.n_constraints
+    if m > model.n_coordinates:
+        out.append(f"constraint: {m} constraints ([[constraint]] + [[programme]]) on "
+                   f"{model.n_coordinates} coordinates {list(coords)}; at most one per "
+                   "coordinate")
+    for name in spec.solver.dependent or ():
+        if name not in coords:
+            out.append("solver.dependent: " + _unknown("coordinate", name, coords))
+    for key, values in (("q", spec.initial.q), ("q_dot", spec.initial.q_dot)):
+        for name in values:
+            if name not in coords:
+                out.append(f"initial.{key}.{name}: " + _unknown("coordinate", name, coords))
+    if spec.initial.static_flexible:
+        if not flex:
+            out.append("initial.static_flexible: the model has no flexible links "
+                       "([[flexible]] or [model.crane] n_rfe > 0)")
+        given = sorted(set(spec.initial.q) & set(flex))
+        if given:
+            out.append(f"initial.q: {given} are set by static_flexible = true (their gravity "
+                       "sag); remove them from initial.q or set static_flexible = false")
+    return out
+
+
+# ====================================================================== assembly
+def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
+    """The Scenario of a valid ``spec`` on its ``source`` model (reference_problems empty).
+
+    Raises ModelFileError (an expression not finite at the initial state, a model the
+    file's springs make invalid) or ConstraintError (the initial state cannot be placed on
+    the constraints, the constraint Jacobian is singular there).
+    """
+    label = str(spec.path)
+    notes = list(source.notes)
+    model = source.model
+    changes = {}
+    for j in spec.joints:
+        changes[j.name] = {k: getattr(j, k) for k in ("stiffness", "spring_reference", "damping")
+                           if getattr(j, k) is not None}
+    drives = tuple(Drive(d.joint, d.function) for d in spec.drives)
+    if model.drives and model.drives != drives:
+        notes.append("drives of the source replaced by the file's [[drive]] list: "
+                     + ", ".join(f"{d.joint}: {d.function!r}" for d in model.drives))
+    frames = dict(model.frames)
+    link_index = {lk.name: k for k, lk in enumerate(model.links)}
+    for c in spec.constraints:
+        if c.frame not in frames:
+            frames[c.frame] = Frame(c.frame, link_index[c.frame], np.eye(4))
+            notes.append(f"{c.key}: frame {c.frame!r} is the frame of link {c.frame!r} (its "
+                         "joint frame; the constraint acts on its origin)")
+    for d in spec.drives:
+        if isinstance(d.function, Tabulated):
+            notes.append(_table_note(d.key, d.function, "N or N m"))
+    for c in spec.constraints:
+        if isinstance(c, CoordinateConstraintSpec) and isinstance(c.function, Tabulated):
+            notes.append(_table_note(f"{c.key}.function", c.function, "m"))
+    try:
+        if changes:
+            model = model.with_changes(joint_changes=changes)
+        model = Model(model.joints, model.links, frames, drives, model.gravity,
+                      model.flexible_links, model.name)
+        validate_model(model)
+    except ModelError as exc:
+        raise ModelFileError([f"{label}: joint: {p}" for p in exc.problems]) from None
+
+    constraints = [_constraint(c) for c in spec.constraints]
+    constraints += [JointProgramme(p.joint, SympyTimeFunction(p.expression, ex.symbol("t")),
+                                   name=p.name) for p in spec.programmes]
+    system = ProgrammedMotion(model, constraints, dependent=spec.solver.dependent,
+                              baumgarte=spec.solver.baumgarte)
+
+    q0 = model.spring_reference.copy()
+    for name, v in spec.initial.q.items():
+        q0[model.index(name)] = v
+    q_dot0 = np.zeros(model.n_coordinates)
+    for name, v in spec.initial.q_dot.items():
+        q_dot0[model.index(name)] = v
+    if spec.initial.static_flexible:
+        flex = sorted(_flexible_coordinates(model), key=model.index)
+        q0 = static_equilibrium(model, q0, flex)
+        notes.append(f"initial: {len(flex)} flexible coordinates in their static sag under "
+                     "gravity (static_flexible = true)")
+    _check_finite_at(spec, model, q0, label)
+    if system.dependent is None:
+        chosen = system.choose_dependent(0.0, q0, q_dot0)
+        if chosen:
+            notes.append(f"solver: dependent coordinates {list(chosen)} chosen by pivoting on "
+                         "the constraint Jacobian at q0 (give [solver] dependent to fix them)")
+    if spec.initial.on_constraints:
+        q0, q_dot0 = _on_constraints(system, q0, q_dot0, label)
+        _check_finite_at(spec, model, q0, label)
+    run = spec.run
+    dt = run.dt
+    if run.integrator == "RK4":
+        suggested = suggested_step(system, q0, run.output_dt)
+        if dt is None:
+            dt = suggested
+            notes.append(f"run: RK4 step dt = {dt:.3g} s suggested at q0 ({STEP_SAFETY:g} x the "
+                         "RK4 stability limit of the springs, dampers and Baumgarte rates, at "
+                         "most output_dt)")
+        elif dt > suggested / STEP_SAFETY:
+            notes.append(f"run: dt = {dt:g} s is above the RK4 stability limit "
+                         f"{suggested / STEP_SAFETY:.3g} s estimated at q0; the run may diverge")
+    return Scenario(name=model.name, model=model, constraints=tuple(constraints), system=system,
+                    q0=q0, q_dot0=q_dot0, t_end=run.t_end, quick_t_end=run.quick_t_end,
+                    integrator=run.integrator, dt=dt, output_dt=run.output_dt,
+                    source=spec.path, urdf=source.urdf, chain=source.chain,
+                    frozen=dict(source.frozen), notes=tuple(notes),
+                    tolerances=spec.tolerance_map(), on_constraints=spec.initial.on_constraints)
+
+
+def _constraint(c):
+    if isinstance(c, ExpressionConstraintSpec):
+        return SympyPointConstraint(c.phi, frame=c.frame, name=c.name)
+    if isinstance(c, EllipseConstraintSpec):
+        return EllipseConstraint(c.a, c.b, center=c.center, frame=c.frame, name=c.name)
+    return CoordinateProgramme(c.function, axis=c.axis, frame=c.frame, name=c.name)
+
+
+def _table_note(key: str, fn: Tabulated, unit: str) -> str:
+    start, end = fn.end_rates()
+    return (f"{key}: table held constant outside [{fn.times[0]:g}, {fn.times[-1]:g}] s; its "
+            f"rate jumps to 0 there (from {start:.3g} and {end:.3g} {unit}/s)")
+
+
+def _check_finite_at(spec: ModelFile, model: Model, q0, label: str) -> None:
+    """Every expression constraint, its gradient, Hessian and time derivatives finite at
+    (t = 0, q0); else ModelFileError naming where the expression is not smooth."""
+    kin = chain_kinematics(model, q0)
+    problems = []
+    for c in spec.constraints:
+        if not isinstance(c, ExpressionConstraintSpec):
+            continue
+        fr = model.frame(c.frame)
+        p = (kin.T[fr.link_index] @ fr.transform[:, 3])[:3]
+        con = SympyPointConstraint(c.phi, frame=c.frame, name=c.name)
+        with np.errstate(all="ignore"):
+            terms = con.local_terms(p, 0.0)
+        if all(np.all(np.isfinite(np.asarray(v, dtype=float))) for v in terms):
+            continue
+        sets = ex.singular_sets(c.phi)
+        problems.append(
+            f"{label}: {c.key}.phi: constraint {c.name!r} = {c.text!r} or its first or second "
+            f"derivatives are not finite at the initial state (t = 0 s, frame {c.frame!r} at "
+            f"x, y, z = {', '.join(f'{v:.6g}' for v in p)} m): phi = {float(terms[0]):.6g}"
+            + (f"; it is not smooth {'; '.join(sets)}" if sets else "")
+            + "; the GPME needs phi twice differentiable along the motion")
+    if problems:
+        raise ModelFileError(problems)
+
+
+def _on_constraints(system: ProgrammedMotion, q0, q_dot0, label: str):
+    phi, _, _, _ = system.constraints(0.0, q0, q_dot0)
+    values = ", ".join(f"{n} = {v:.6g}" for n, v in zip(system.constraint_names, phi))
+    try:
+        return system.consistent_state(0.0, q0, q_dot0)
+    except ConstraintError as exc:
+        raise ConstraintError(f"{label}: initial.on_constraints = true: {exc}. At the given "
+                              f"q0 the constraints are {values}; change initial.q or the "
+                              "constraints so that they can be met") from None
+
+
+def suggested_step(system: ProgrammedMotion, q0, output_dt: float) -> float:
+    """s: STEP_SAFETY x the RK4 stability step of the linearised springs, dampers and
+    inertia at q0 (gpme_core.integrate.suggest_rk4_step) and of the Baumgarte dynamics
+    s^2 + 2 alpha s + beta^2 = 0, at most ``output_dt``."""
+    step = suggest_rk4_step(system.model, q0, safety=STEP_SAFETY)
+    if system.n_constraints:
+        for root in np.roots([1.0, 2.0 * system.alpha, system.beta ** 2]):
+            step = min(step, STEP_SAFETY * rk4_stability_step(root))
+    return float(min(step, output_dt))

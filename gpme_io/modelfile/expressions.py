@@ -1,0 +1,225 @@
+"""Expressions written in a model file (constraints phi(x, y, z, t), programmes q(t),
+drives f(t)), read into SymPy without ever evaluating the user's text as Python.
+
+The text is parsed by Python's ``ast`` module (syntax only) and the tree is converted node
+by node into SymPy: numbers, the allowed symbols, ``pi``, ``E``, ``+ - * / **`` and the
+smooth functions of :data:`FUNCTIONS`.  Anything else (attribute access, indexing,
+keywords, strings, comparisons, unknown names) is a problem naming what was found and
+what is allowed.  Functions whose second derivative does not exist everywhere (abs,
+sign, Heaviside, Piecewise, Max/Min, floor, ...) are refused with the reason: the GPME
+needs the second derivative of every constraint and programme (kappa, the programmed
+acceleration).  Functions smooth only on part of the line (sqrt, log, division, ...)
+are accepted; :func:`singular_sets` names where they are not smooth, for the message
+given when an expression is not finite at the initial state.
+"""
+import ast
+import difflib
+import math
+from typing import Mapping, Optional
+
+import sympy as sp
+
+# name in the file -> (SymPy function, number of arguments)
+FUNCTIONS = {
+    "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1),
+    "asin": (sp.asin, 1), "acos": (sp.acos, 1), "atan": (sp.atan, 1), "atan2": (sp.atan2, 2),
+    "sinh": (sp.sinh, 1), "cosh": (sp.cosh, 1), "tanh": (sp.tanh, 1),
+    "asinh": (sp.asinh, 1), "acosh": (sp.acosh, 1), "atanh": (sp.atanh, 1),
+    "exp": (sp.exp, 1), "log": (sp.log, 1), "sqrt": (sp.sqrt, 1),
+}
+CONSTANTS = {"pi": sp.pi, "E": sp.E}
+_SMOOTH_HINT = ("the GPME needs the second derivative of every constraint and programme "
+                "(kappa, the programmed acceleration); write a smooth form")
+NON_SMOOTH = {
+    "abs": "its derivative jumps where its argument is 0 (use e.g. sqrt(u**2 + eps**2))",
+    "Abs": "its derivative jumps where its argument is 0 (use e.g. sqrt(u**2 + eps**2))",
+    "sign": "it jumps at 0", "sgn": "it jumps at 0", "Heaviside": "it jumps at 0",
+    "DiracDelta": "it is a distribution, not a function",
+    "Piecewise": "its pieces meet without a continuous second derivative",
+    "Max": "it has a kink where its arguments are equal",
+    "Min": "it has a kink where its arguments are equal",
+    "max": "it has a kink where its arguments are equal",
+    "min": "it has a kink where its arguments are equal",
+    "floor": "it jumps at every integer", "ceiling": "it jumps at every integer",
+    "ceil": "it jumps at every integer", "round": "it jumps at every half-integer",
+    "frac": "it jumps at every integer", "Mod": "it jumps at every multiple of its modulus",
+}
+_NON_SMOOTH_TYPES = (sp.Abs, sp.sign, sp.Heaviside, sp.DiracDelta, sp.Piecewise, sp.Max,
+                     sp.Min, sp.floor, sp.ceiling, sp.frac, sp.Mod)
+MAX_LENGTH = 5000          # characters; longer text is refused before parsing
+
+
+class _Refused(Exception):
+    """One problem found while converting the tree (stops the conversion)."""
+
+
+def describe_symbols(symbols: Mapping[str, str]) -> str:
+    """'x, y, z (m) and t (s)' for {'x': 'm', 'y': 'm', 'z': 'm', 't': 's'}."""
+    groups: dict = {}
+    for name, unit in symbols.items():
+        groups.setdefault(unit, []).append(name)
+    parts = [f"{', '.join(names)} ({unit})" for unit, names in groups.items()]
+    return parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+def symbol(name: str) -> sp.Symbol:
+    """The SymPy symbol used for ``name`` (plain, no assumptions: the same symbols as
+    gpme_core.constraints.SympyPointConstraint and SympyTimeFunction)."""
+    return sp.Symbol(name)
+
+
+def parse_expression(text: object, symbols: Mapping[str, str]) -> tuple:
+    """(SymPy expression or None, [problem, ...]) of ``text``.
+
+    symbols : {allowed symbol name: unit}, e.g. {'x': 'm', 'y': 'm', 'z': 'm', 't': 's'}
+
+    Problems are messages without a key path (the caller adds it).
+    """
+    if not isinstance(text, str):
+        return None, [f"must be a string holding an expression in "
+                      f"{describe_symbols(symbols)}, got {text!r}"]
+    if not text.strip():
+        return None, ["is empty; write an expression in " + describe_symbols(symbols)]
+    if len(text) > MAX_LENGTH:
+        return None, [f"is {len(text)} characters long; at most {MAX_LENGTH}"]
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        return None, [f"{text!r} is not an expression ({exc.msg} at column {exc.offset})"]
+    try:
+        expr = _convert(tree.body, symbols)
+    except _Refused as exc:
+        return None, [f"{text!r}: {exc}"]
+    except RecursionError:
+        return None, [f"{text!r}: nested too deeply"]
+    problems = []
+    bad = sorted({type(a).__name__ for a in expr.atoms(*_NON_SMOOTH_TYPES)})
+    if bad:
+        problems.append(f"{text!r} becomes {bad} in SymPy, which is not smooth; {_SMOOTH_HINT}")
+    if expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+        problems.append(f"{text!r} is infinite or undefined ({expr})")
+    elif expr.has(sp.I):
+        problems.append(f"{text!r} is complex ({expr}); constraints and programmes are real")
+    return (None if problems else expr), problems
+
+
+def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
+    if isinstance(node, ast.Constant):
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise _Refused(f"{v!r} is not a number; only real numbers are allowed")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise _Refused(f"a number overflows to {v!r}; numbers must be finite")
+        return sp.Integer(v) if isinstance(v, int) else sp.Float(v)
+    if isinstance(node, ast.Name):
+        name = node.id
+        if name in symbols:
+            return symbol(name)
+        if name in CONSTANTS:
+            return CONSTANTS[name]
+        if name in FUNCTIONS or name in NON_SMOOTH:
+            raise _Refused(f"{name!r} is a function: call it, e.g. {name}(t)")
+        raise _Refused(f"unknown symbol {name!r}{_did_you_mean(name, list(symbols) + list(CONSTANTS))}"
+                       f"; allowed {describe_symbols(symbols)}, and the constants pi, E")
+    if isinstance(node, ast.UnaryOp):
+        arg = _convert(node.operand, symbols)
+        if isinstance(node.op, ast.USub):
+            return -arg
+        if isinstance(node.op, ast.UAdd):
+            return arg
+        raise _Refused(f"the operator {_op_text(node.op)!r} is not allowed; use + - * / **")
+    if isinstance(node, ast.BinOp):
+        op = node.op
+        if isinstance(op, ast.BitXor):
+            raise _Refused("'^' is not a power here: write a**b")
+        if isinstance(op, (ast.Mod, ast.FloorDiv)):
+            raise _Refused(f"the operator {_op_text(op)!r} is not smooth ({NON_SMOOTH['Mod']}); "
+                           + _SMOOTH_HINT)
+        ops = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b,
+               ast.Mult: lambda a, b: a * b, ast.Div: lambda a, b: a / b,
+               ast.Pow: lambda a, b: a ** b}
+        if type(op) not in ops:
+            raise _Refused(f"the operator {_op_text(op)!r} is not allowed; use + - * / **")
+        return ops[type(op)](_convert(node.left, symbols), _convert(node.right, symbols))
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name):
+            raise _Refused("only the named functions "
+                           f"{', '.join(FUNCTIONS)} can be called")
+        name = node.func.id
+        if name in NON_SMOOTH:
+            raise _Refused(f"{name}() is not smooth: {NON_SMOOTH[name]}; {_SMOOTH_HINT}")
+        if name not in FUNCTIONS:
+            raise _Refused(f"unknown function {name!r}{_did_you_mean(name, list(FUNCTIONS))}; "
+                           f"allowed: {', '.join(FUNCTIONS)}")
+        if node.keywords or any(isinstance(a, ast.Starred) for a in node.args):
+            raise _Refused(f"{name}() takes plain arguments only")
+        fn, arity = FUNCTIONS[name]
+        if len(node.args) != arity:
+            raise _Refused(f"{name}() takes {arity} argument{'s' if arity > 1 else ''}, "
+                           f"got {len(node.args)}")
+        return fn(*[_convert(a, symbols) for a in node.args])
+    if isinstance(node, ast.Attribute):
+        raise _Refused(f"attribute access ('.{node.attr}') is not allowed")
+    if isinstance(node, (ast.Compare, ast.BoolOp, ast.IfExp)):
+        raise _Refused("comparisons and conditions make a function piecewise, which is not "
+                       "smooth; " + _SMOOTH_HINT)
+    raise _Refused(f"{type(node).__name__} is not allowed; write numbers, "
+                   f"{describe_symbols(symbols)}, pi, E, + - * / ** and the functions "
+                   f"{', '.join(FUNCTIONS)}")
+
+
+def _op_text(op: ast.AST) -> str:
+    return {ast.BitAnd: "&", ast.BitOr: "|", ast.LShift: "<<", ast.RShift: ">>",
+            ast.MatMult: "@", ast.Mod: "%", ast.FloorDiv: "//", ast.Invert: "~",
+            ast.Not: "not"}.get(type(op), type(op).__name__)
+
+
+def _did_you_mean(name: str, choices: list) -> str:
+    close = difflib.get_close_matches(name, choices, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def singular_sets(expr: sp.Expr) -> list:
+    """Where the parts of ``expr`` that are smooth only on part of the line are not:
+    e.g. ['sqrt: where x**2 - 1 <= 0', 'division: where x - 2 = 0']."""
+    out = []
+    for sub in sp.preorder_traversal(expr):
+        if isinstance(sub, sp.Pow):
+            base, e = sub.args
+            if base.is_number:
+                continue
+            if not e.is_number:
+                out.append(f"power: where {base} <= 0")
+            elif e.is_integer:
+                if e.is_negative:
+                    out.append(f"division: where {base} = 0")
+            elif e == sp.Rational(1, 2):
+                out.append(f"sqrt: where {base} <= 0")
+            elif e == sp.Rational(-1, 2):
+                out.append(f"1/sqrt: where {base} <= 0")
+            else:
+                out.append(f"power {e}: where {base} <= 0")
+        elif isinstance(sub, sp.log):
+            out.append(f"log: where {sub.args[0]} <= 0")
+        elif isinstance(sub, (sp.asin, sp.acos)):
+            out.append(f"{type(sub).__name__}: where |{sub.args[0]}| >= 1")
+        elif isinstance(sub, sp.atanh):
+            out.append(f"atanh: where |{sub.args[0]}| >= 1")
+        elif isinstance(sub, sp.acosh):
+            out.append(f"acosh: where {sub.args[0]} <= 1")
+        elif isinstance(sub, sp.tan):
+            out.append(f"tan: where cos({sub.args[0]}) = 0")
+        elif isinstance(sub, sp.atan2):
+            out.append(f"atan2: where {sub.args[0]} = {sub.args[1]} = 0")
+    seen: dict = {}
+    return [seen.setdefault(s, s) for s in out if s not in seen]
+
+
+def depends_on(expr: sp.Expr, names) -> bool:
+    """Whether ``expr`` contains any of the symbols ``names``."""
+    return bool(expr.free_symbols & {symbol(n) for n in names})
+
+
+def expression_text(expr: Optional[sp.Expr]) -> str:
+    """Short text of an expression for notes and messages."""
+    return "" if expr is None else str(expr)

@@ -1,0 +1,242 @@
+"""The parsed, validated content of a model file: typed, frozen dataclasses.
+
+gpme_io.modelfile.load fills them from the TOML text (every value checked, units SI);
+gpme_io.modelfile.build turns them into a gpme_io.scenario.Scenario.  Nothing here
+reads files or builds models.  ``key`` fields hold the entry's key path in the file
+(e.g. ``"constraint[1]"``, counted from 0 in file order) for messages.
+docs/models.md describes every key.
+"""
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Mapping, Optional, Union
+
+import sympy as sp
+
+from gpme_core.time_functions import TimeFunction
+from gpme_io.scenario import ToleranceOverride
+
+BUILTIN_MODELS = ("crane",)
+SECTION_SHAPES = {"circle": ("diameter",), "tube": ("outer_diameter", "wall_thickness"),
+                  "rectangle": ("width_y", "height_z")}
+CONSTRAINT_KINDS = ("expression", "ellipse", "coordinate")
+AXES = {"x": 0, "y": 1, "z": 2}
+# units of the symbols of each kind of expression
+POINT_SYMBOLS = {"x": "m", "y": "m", "z": "m", "t": "s"}
+TIME_SYMBOLS = {"t": "s"}
+
+
+def _frozen_map(obj, name):
+    object.__setattr__(obj, name, MappingProxyType(dict(getattr(obj, name))))
+
+
+@dataclass(frozen=True)
+class CraneSource:
+    """``builtin = "crane"``: gpme_examples.crane with CraneParameters ``overrides``
+    (mechanism fields only) and ``n_rfe`` RFEM segments of the arm (0 = rigid)."""
+
+    overrides: Mapping[str, object] = field(default_factory=dict)
+    n_rfe: int = 0
+
+    def __post_init__(self):
+        _frozen_map(self, "overrides")
+
+
+@dataclass(frozen=True)
+class UrdfSource:
+    """``urdf = "..."``: ``path`` resolved (relative to the model file, or inside the
+    example-robot-data package), ``written`` as in the file, optional side file."""
+
+    path: Path
+    written: str
+    side_file: Optional[Path] = None
+
+
+@dataclass(frozen=True)
+class ModelSection:
+    """[model]: name, source, gravity (3,) m/s^2 in the world frame."""
+
+    name: str
+    source: Union[CraneSource, UrdfSource]
+    gravity: tuple
+
+
+@dataclass(frozen=True)
+class ChainSection:
+    """[chain]: the serial chain from link ``root`` to link ``tip`` of the URDF tree (None:
+    the reader's default), joints off the chain held at ``frozen`` {joint: rad or m}."""
+
+    root: Optional[str] = None
+    tip: Optional[str] = None
+    frozen: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self):
+        _frozen_map(self, "frozen")
+
+
+@dataclass(frozen=True)
+class SectionSpec:
+    """A beam cross-section: ``shape`` in SECTION_SHAPES with its ``dimensions`` (m)."""
+
+    shape: str
+    dimensions: Mapping[str, float]
+
+    def __post_init__(self):
+        _frozen_map(self, "dimensions")
+
+
+@dataclass(frozen=True)
+class FlexibleSpec:
+    """[[flexible]]: URDF link ``link`` as an RFEM beam.
+
+    youngs_modulus, shear_modulus : Pa;  density : kg/m^3;  segments : RFEM segments (>= 0)
+    bending_viscosity, torsion_viscosity : Pa s (Kelvin-Voigt; torsion None: eta_E G / E)
+    axis (3,), section_y_axis (3,) : in the link frame (None: from the geometry)
+    length : m (None: from the geometry)
+    """
+
+    key: str
+    link: str
+    section: SectionSpec
+    youngs_modulus: float
+    shear_modulus: float
+    density: float
+    segments: int
+    bending_viscosity: float
+    torsion_viscosity: Optional[float] = None
+    axis: Optional[tuple] = None
+    length: Optional[float] = None
+    section_y_axis: Optional[tuple] = None
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """[[joint]]: spring and damper of chain joint ``name`` (None: keep the source's).
+
+    stiffness : N m/rad or N/m;  spring_reference : rad or m;  damping : N m s/rad or N s/m
+    """
+
+    key: str
+    name: str
+    stiffness: Optional[float] = None
+    spring_reference: Optional[float] = None
+    damping: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """[[drive]]: a generalized force (N or N m) ``function`` of time on coordinate ``joint``."""
+
+    key: str
+    joint: str
+    function: TimeFunction
+
+
+@dataclass(frozen=True)
+class ExpressionConstraintSpec:
+    """[[constraint]] phi(x, y, z, t) = 0 on the world position (m) of frame ``frame``."""
+
+    key: str
+    name: str
+    frame: str
+    phi: sp.Expr
+    text: str
+
+
+@dataclass(frozen=True)
+class EllipseConstraintSpec:
+    """[[constraint]] kind = "ellipse": ((x - xc)/a)^2 + ((y - yc)/b)^2 - 1 = 0 (m)."""
+
+    key: str
+    name: str
+    frame: str
+    a: float
+    b: float
+    center: tuple
+
+
+@dataclass(frozen=True)
+class CoordinateConstraintSpec:
+    """[[constraint]] kind = "coordinate": world coordinate ``axis`` (0 x, 1 y, 2 z) of the
+    frame's origin follows ``function`` (m) of time."""
+
+    key: str
+    name: str
+    frame: str
+    axis: int
+    function: TimeFunction
+
+
+ConstraintSpec = Union[ExpressionConstraintSpec, EllipseConstraintSpec, CoordinateConstraintSpec]
+
+
+@dataclass(frozen=True)
+class ProgrammeSpec:
+    """[[programme]]: coordinate ``joint`` follows q(t) = ``expression`` (rad or m)."""
+
+    key: str
+    joint: str
+    expression: sp.Expr
+    text: str
+    name: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """[solver]: dependent coordinates (None: chosen by pivoting at q0) and Baumgarte
+    (alpha, beta) in 1/s."""
+
+    dependent: Optional[tuple] = None
+    baumgarte: tuple = (20.0, 20.0)
+
+
+@dataclass(frozen=True)
+class InitialSpec:
+    """[initial]: q {coordinate: rad or m} (others: their spring reference), q_dot
+    {coordinate: rad/s or m/s} (others 0), on_constraints, static_flexible."""
+
+    q: Mapping[str, float] = field(default_factory=dict)
+    q_dot: Mapping[str, float] = field(default_factory=dict)
+    on_constraints: bool = False
+    static_flexible: bool = False
+
+    def __post_init__(self):
+        _frozen_map(self, "q")
+        _frozen_map(self, "q_dot")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """[run]: t_end, quick_t_end, dt (RK4 step, None: suggested), output_dt, all in s."""
+
+    t_end: float
+    quick_t_end: float
+    integrator: str = "RK4"
+    dt: Optional[float] = None
+    output_dt: float = 1e-3
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """Everything a model file says, validated (entries that failed are left out, so a
+    ModelFile with problems is only used to find more problems, never built)."""
+
+    path: Path
+    model: Optional[ModelSection]
+    chain: Optional[ChainSection] = None
+    flexible: tuple = ()
+    joints: tuple = ()
+    drives: tuple = ()
+    constraints: tuple = ()
+    programmes: tuple = ()
+    solver: SolverSpec = SolverSpec()
+    initial: InitialSpec = InitialSpec()
+    run: Optional[RunSpec] = None
+    tolerances: tuple = ()      # ToleranceOverride, in file order
+
+    @property
+    def n_constraints(self) -> int:
+        return len(self.constraints) + len(self.programmes)
+
+    def tolerance_map(self) -> Mapping[str, ToleranceOverride]:
+        return {t.check: t for t in self.tolerances}
