@@ -351,7 +351,7 @@ def original_urdf_case(scenario) -> Optional[ModelCase]:
     pin_sys = from_original_urdf(scenario.urdf, model.coordinate_names,
                                  [lk.name for lk in model.links], list(model.frames),
                                  scenario.frozen, model.gravity, model.stiffness,
-                                 model.spring_reference)
+                                 model.spring_reference, model.damping)
     return _case(f"{scenario.name} (original URDF)", "original URDF", scenario,
                  scenario.system, pin_sys)
 

@@ -202,7 +202,7 @@ def _lock_value(joint, value, name, problems):
 
 def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: Sequence[str],
                        frame_names: Sequence[str], frozen: Mapping[str, float], gravity,
-                       stiffness, spring_reference) -> PinocchioSystem:
+                       stiffness, spring_reference, damping) -> PinocchioSystem:
     """:class:`PinocchioSystem` of the user's URDF, reduced to the gpme chain by Pinocchio.
 
     urdf_path        : the user's URDF (whole tree); Pinocchio's parser reads it
@@ -211,10 +211,13 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
     frozen           : {URDF joint: value (rad or m)}; every other joint off the chain is
                        locked at 0 (Pinocchio's neutral configuration for it)
     gravity          : (3,) m/s^2, world frame (a URDF has none)
-    stiffness, spring_reference : (n,) gpme order; a URDF has no springs, so these come
-                       from the model file (the only terms not read by Pinocchio here)
+    stiffness, spring_reference, damping : (n,) gpme order; a URDF has no springs, and a
+                       model file may override the URDF's <dynamics damping>, so these come
+                       from the model (the only terms not read by Pinocchio here); the
+                       joints whose damping differs from the URDF's as Pinocchio read it
+                       are listed in the notes.
 
-    Damping is Pinocchio's, read from <dynamics damping>.  ModelFileError lists every
+    ModelFileError lists every
     mismatch (a coordinate, link or frame Pinocchio does not have, nv != n, a frozen joint
     that is on the chain or not in the file).
     """
@@ -271,14 +274,19 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
              f"nv = {full.nv}); buildReducedModel locked {len(locked)} joint(s): "
              + (", ".join(f"{k} = {v:g}" for k, v in locked.items()) or "none")
              + f"; reduced nq = {pm.nq}, nv = {pm.nv}",
-             "springs (stiffness, spring reference) and gravity from the model file (a URDF "
-             "has none); damping from the URDF's <dynamics damping> as Pinocchio read it"]
+             "springs, dampers and gravity from the model (a URDF has no springs or gravity, "
+             "and a model file may override its damping)"]
+    urdf_damping = np.array(pm.damping)[v_index]
+    differ = [f"{c} {d:g} (URDF {u:g})" for c, d, u in zip(chain, damping, urdf_damping)
+              if d != u]
+    if differ:
+        notes.append("damping set by the model file, not the URDF: " + ", ".join(differ))
     if n_cont:
         notes.append(f"{n_cont} continuous joint(s) held as (cos q, sin q) in Pinocchio")
     return PinocchioSystem(pm, tuple(_frame_id(pm, n) for n in link_names),
                            {f: _frame_id(pm, f) for f in frame_names},
                            np.asarray(stiffness, dtype=float).copy(),
                            np.asarray(spring_reference, dtype=float).copy(),
-                           np.array(pm.damping)[v_index], "original urdf",
+                           np.asarray(damping, dtype=float).copy(), "original urdf",
                            np.array(q_index, dtype=int), v_index,
                            np.array(continuous, dtype=bool), locked, tuple(notes))
