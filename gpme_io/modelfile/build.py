@@ -73,20 +73,13 @@ def _crane_model(spec: ModelFile) -> SourceModel:
 
 
 def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
-    chain = spec.chain
-    try:
-        from gpme_io.urdf_reader import FlexibleLink, load_urdf
-    except ImportError:
-        return _legacy_urdf_model(spec, src)
     from gpme_core.rfem import BeamSection
+    from gpme_io.urdf_reader import FlexibleLink, load_urdf
+    shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
+              "rectangle": BeamSection.rectangle}
     problems = []
-    if chain is not None and (chain.root is None) != (chain.tip is None):
-        problems.append("chain: give both root and tip, or neither (then the whole URDF tree "
-                        "must be one serial chain)")
     flexible = {}
     for f in spec.flexible:
-        shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
-                  "rectangle": BeamSection.rectangle}
         try:
             section = shapes[f.section.shape](**dict(f.section.dimensions))
             flexible[f.link] = FlexibleLink(
@@ -94,38 +87,21 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
                 bending_viscosity=f.bending_viscosity, torsion_viscosity=f.torsion_viscosity,
                 axis=f.axis, length=f.length, section_y_axis=f.section_y_axis)
         except ModelError as exc:
-            problems += [f"{f.key}: {p}" for p in exc.problems]
+            problems += [f"{f.key}.section: {p}" for p in exc.problems]
     if problems:
         raise ModelFileError(problems)
-    ends = None if chain is None or chain.root is None else (chain.root, chain.tip)
+    chain = spec.chain
+    ends = None if chain is None or (chain.root is None and chain.tip is None) \
+        else (chain.root, chain.tip)
     try:
-        res = load_urdf(src.path, side_file=src.side_file, chain=ends,
-                        frozen=dict(chain.frozen) if chain is not None else {},
+        res = load_urdf(src.path, side_file=src.side_file if src.side_file else "auto",
+                        chain=ends, frozen=dict(chain.frozen) if chain is not None else {},
                         flexible=flexible, gravity=tuple(spec.model.gravity),
                         name=spec.model.name)
     except ModelError as exc:
         raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
-    return SourceModel(res.model, src.path, tuple(res.chain) if res.chain else None,
-                       tuple(dict(res.frozen).items()), tuple(res.notes))
-
-
-def _legacy_urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
-    """gpme_io.urdf.read_urdf, for as long as gpme_io.urdf_reader is not there: no chain
-    selection, no frozen joints, no flexible links."""
-    from gpme_io.urdf import read_urdf
-    problems = []
-    if spec.chain is not None:
-        problems.append("chain: choosing a chain or freezing joints needs gpme_io.urdf_reader")
-    if spec.flexible:
-        problems.append("flexible: flexible URDF links need gpme_io.urdf_reader")
-    if problems:
-        raise ModelFileError(problems)
-    try:
-        model = read_urdf(src.path, side_file=src.side_file, gravity=tuple(spec.model.gravity),
-                          name=spec.model.name)
-    except ModelError as exc:
-        raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
-    return SourceModel(model, src.path, None, (), ())
+    return SourceModel(res.model, src.path, tuple(res.chain), tuple(dict(res.frozen).items()),
+                       tuple(res.notes))
 
 
 # ====================================================================== name checks
