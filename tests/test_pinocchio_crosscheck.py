@@ -42,13 +42,14 @@ def _rpy(roll, pitch, yaw):
 def small_scenario(name="small_arm", tolerances=None):
     """4 joints (revolute, prismatic, two revolute), a tool frame rotated and offset from
     its link, a SymPy sphere constraint on it whose centre (hence gradient) moves with
-    time, and a joint programme on the last joint."""
+    time along the yaw axis, and a joint programme on the last joint; starts on the
+    constraints."""
     b = ChainBuilder(name)
     b.add_joint("yaw", REVOLUTE, (0, 0, 1), stiffness=2.0, spring_reference=0.1, damping=0.05)
     b.add_body(cuboid(3.0, (0.3, 0.3, 0.2), com=(0.0, 0.02, 0.1)))
     b.add_drive("yaw", Cosine(0.5, 0.3, 2.0))
     b.add_joint("lift", PRISMATIC, np.array([0.0, 0.6, 0.8]), origin=_h(xyz=(0.1, 0.0, 0.2)),
-                damping=2.0, limits=(-0.1, 0.3))
+                stiffness=2000.0, spring_reference=0.1, damping=20.0, limits=(-0.1, 0.3))
     b.add_body(cuboid(1.5, (0.1, 0.1, 0.5), com=(0.0, 0.0, 0.1)))
     b.add_joint("pitch", REVOLUTE, (0, 1, 0), origin=_h(_rpy(0.1, 0.0, 0.4), (0.0, 0.05, 0.4)),
                 limits=(-1.5, 1.5))
@@ -57,14 +58,15 @@ def small_scenario(name="small_arm", tolerances=None):
     b.add_body(cuboid(0.4, (0.15, 0.1, 0.1), com=(0.05, 0.01, 0.0)))
     b.add_frame("tool", _h(_rpy(0.3, -0.5, 0.7), (0.12, 0.04, -0.03)))
     model = b.build()
-    constraints = (SympyPointConstraint("(x - 0.5 - 0.1*sin(t))**2 + (y - 0.05*t)**2 "
-                                        "+ (z - 0.6)**2 - 0.3**2", frame="tool", name="Phi_sphere"),
+    constraints = (SympyPointConstraint("x**2 + y**2 + (z - 0.05*sin(2*t))**2 - 0.935**2",
+                                        frame="tool", name="Phi_sphere"),
                    JointProgramme("roll", SympyTimeFunction("0.2*sin(3*t)"), name="Phi_roll"))
     system = ProgrammedMotion(model, constraints, dependent=("pitch", "roll"),
                               baumgarte=(10.0, 10.0))
+    q0, q_dot0 = system.consistent_state(0.0, np.array([0.0, 0.1, 0.3, 0.0]), np.zeros(4))
     return Scenario(name=name, model=model, constraints=constraints, system=system,
-                    q0=np.array([0.0, 0.1, 0.3, 0.0]), q_dot0=np.zeros(4), t_end=2.0,
-                    quick_t_end=0.5, tolerances=tolerances or {})
+                    q0=q0, q_dot0=q_dot0, t_end=2.0, quick_t_end=0.5,
+                    tolerances=tolerances or {}, on_constraints=True)
 
 
 def branch_arm_model(finger=0.3):
@@ -84,7 +86,8 @@ def branch_arm_model(finger=0.3):
     b.add_body(RigidBodyInertia(0.3, (0, 0, 0), np.diag([1e-4, 3e-4, 3e-4])),
                origin=finger_frame @ _h(xyz=(0.04, 0, 0)))
     b.add_joint("slide", PRISMATIC, (1, 0, 0), origin=_h(_rpy(0, 0, 0.3), (0.4, 0, 0)),
-                damping=1.0, limits=(-0.1, 0.2), link="link3")
+                damping=1.0, limits=(-0.1, 0.2), link="link3", stiffness=500.0,
+                spring_reference=0.05)     # the spring is the model's (a URDF has none)
     b.add_body(RigidBodyInertia(0.5, (0.05, 0, 0), np.diag([5e-4, 1e-3, 1e-3])))
     b.add_frame("tool", _h(_rpy(0.3, -0.2, 0.5), (0.1, 0.02, -0.03)))
     return b.build()
@@ -94,8 +97,9 @@ def branch_arm_scenario(frozen=None, built_finger=0.3):
     model = branch_arm_model(built_finger)
     constraints = (SympyPointConstraint("z - 0.5 - 0.05*sin(2*t)", frame="tool", name="Phi_z"),)
     system = ProgrammedMotion(model, constraints, dependent=("elbow",), baumgarte=(10.0, 10.0))
+    q0, q_dot0 = system.consistent_state(0.0, np.array([0.0, 0.5, 0.05]), np.zeros(3))
     return Scenario(name="branch_arm", model=model, constraints=constraints, system=system,
-                    q0=np.array([0.0, 0.5, 0.05]), q_dot0=np.zeros(3), t_end=1.0,
+                    q0=q0, q_dot0=q_dot0, t_end=1.0, on_constraints=True,
                     quick_t_end=0.2, urdf=DATA / "branch_arm.urdf", chain=("base", "tool"),
                     frozen={"finger": 0.3} if frozen is None else frozen)
 

@@ -47,7 +47,7 @@ import pandas as pd
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from gpme_core.errors import ConstraintError
+from gpme_core.errors import ConstraintError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
@@ -58,6 +58,7 @@ from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
                                     reference_constraints)
 from ..reports import tables as report
+from ..sampling import state_ranges
 from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
 
 ENGINE = "pinocchio"
@@ -186,44 +187,11 @@ class State:
 
 
 # --------------------------------------------------------------------------- states
-RFEM_ANGLE = 0.02         # rad, RFEM angles drawn within +-this of their spring reference
-RFEM_RATE = 2.0           # rad/s
-RATE = 1.0                # rad/s or m/s, every other coordinate
-OPEN_REVOLUTE = np.pi     # rad around q0 where a revolute joint has no (finite) limit
-OPEN_PRISMATIC = 0.2      # m around q0 where a prismatic joint has no (finite) limit
-
-
-def state_ranges(model: Model, flexible: Sequence[str] = (), q0: Optional[NDArray] = None):
-    """(lo (n,), hi (n,), rate (n,)) of the random states, SI units.
-
-    Finite limits: uniform inside them.  An open end: revolute q0 +- pi rad, prismatic
-    q0 +- 0.2 m (cut at the other end's finite limit).  RFEM coordinates (``flexible``):
-    spring reference +- 0.02 rad (static bending of the crane's arm ~0.004 rad per
-    element).  Rates +-1 rad/s or m/s, RFEM +-2 rad/s.
-    """
-    n = model.n_coordinates
-    q0 = np.zeros(n) if q0 is None else np.asarray(q0, dtype=float)
-    lo, hi = model.lower_limits.copy(), model.upper_limits.copy()
-    half = np.where(model.is_revolute, OPEN_REVOLUTE, OPEN_PRISMATIC)
-    rate = np.full(n, RATE)
-    flex = np.array([name in set(flexible) for name in model.coordinate_names], dtype=bool)
-    centre = np.where(flex, model.spring_reference, q0)
-    half = np.where(flex, RFEM_ANGLE, half)
-    rate[flex] = RFEM_RATE
-    open_lo, open_hi = ~np.isfinite(lo) | flex, ~np.isfinite(hi) | flex
-    lo = np.where(open_lo, np.maximum(centre - half, lo), lo)
-    hi = np.where(open_hi, np.minimum(centre + half, hi), hi)
-    bad = [model.coordinate_names[k] for k in np.flatnonzero(~(lo < hi))]
-    if bad:
-        raise ValueError(f"{model.name}: empty sampling range for {bad} (q0 outside its "
-                         "limits?)")
-    return lo, hi, rate
-
-
 def random_states(system: ProgrammedMotion, count: int, rng: np.random.Generator,
                   t_max: float, flexible: Sequence[str] = (), q0: Optional[NDArray] = None,
                   max_draws: Optional[int] = None) -> list:
-    """``count`` seeded random states (:func:`state_ranges`, t uniform in [0, t_max] s)
+    """``count`` seeded random states (crosscheck.sampling.state_ranges, t uniform in
+    [0, t_max] s)
     where the GPME is solvable; a draw with a singular dependent block is replaced by
     the next draw, at most ``max_draws`` (default 20 count + 20) draws in all."""
     lo, hi, rate = state_ranges(system.model, flexible, q0)
@@ -308,7 +276,12 @@ def scenario_states(scenario, plan: RunPlan) -> list:
     states = random_states(system, n_random, rng, scenario.t_end, scenario.flexible_coordinates,
                            scenario.q0)
     t_run = min(plan.t_run, scenario.t_end)
-    return states + run_states(system, n_run, t_run, scenario.q0, scenario.q_dot0)
+    try:
+        along = run_states(system, n_run, t_run, scenario.q0, scenario.q_dot0)
+    except (ConstraintError, SimulationError) as exc:
+        raise type(exc)(f"scenario {scenario.name!r}: the Radau run for the states along "
+                        f"the run ({t_run:g} s from q0) failed: {exc}") from exc
+    return states + along
 
 
 # --------------------------------------------------------------------------- cases
