@@ -107,7 +107,7 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
 # ====================================================================== name checks
 def _unknown(what: str, name: str, choices) -> str:
     choices = list(choices)
-    close = difflib.get_close_matches(name, choices, n=1)
+    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.5)
     mean = f"did you mean {close[0]!r}? " if close else ""
     shown = ", ".join(choices[:30]) + (f", ... ({len(choices)} in all)" if len(choices) > 30
                                         else "")

@@ -165,10 +165,10 @@ class _Checker:
             self.add(where, f"must be a non-empty string ({what}), got {_type_name(v)} {v!r}")
             return None
         if choices is not None and v not in choices:
-            close = difflib.get_close_matches(v, list(choices), n=1)
-            mean = f"did you mean {close[0]!r}? " if close else ""
-            self.add(where, f"{v!r} is not one of {', '.join(map(repr, choices))}"
-                     f"{'; ' + mean.rstrip('? ') + '?' if mean else ''}")
+            same_case = [ch for ch in choices if ch.lower() == v.lower()]
+            close = same_case or difflib.get_close_matches(v, list(choices), n=1)
+            mean = f"; did you mean {close[0]!r}?" if close else ""
+            self.add(where, f"{v!r} is not one of {', '.join(map(repr, choices))}{mean}")
             return None
         return v
 
