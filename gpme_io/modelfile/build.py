@@ -74,6 +74,7 @@ def _crane_model(spec: ModelFile) -> SourceModel:
 
 def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
     from gpme_core.rfem import BeamSection
+    from gpme_io.side_file import side_file_path
     from gpme_io.urdf_reader import FlexibleLink, load_urdf
     shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
               "rectangle": BeamSection.rectangle}
@@ -100,8 +101,12 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
                         name=spec.model.name)
     except ModelError as exc:
         raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
+    notes = list(res.notes)
+    if src.side_file is None and side_file_path(src.path).is_file():
+        notes.append(f"side file {side_file_path(src.path).name} beside the URDF read (springs, "
+                     "spring references, drives; gravity is the model file's)")
     return SourceModel(res.model, src.path, tuple(res.chain), tuple(dict(res.frozen).items()),
-                       tuple(res.notes))
+                       tuple(notes))
 
 
 # ====================================================================== name checks
@@ -184,7 +189,9 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                            if getattr(j, k) is not None}
     drives = tuple(Drive(d.joint, d.function) for d in spec.drives)
     if model.drives and model.drives != drives:
-        notes.append("drives of the source replaced by the file's [[drive]] list: "
+        notes.append(("drives of the source replaced by the file's [[drive]] list" if drives
+                      else "drives of the source dropped (the file has no [[drive]]; it lists "
+                      "every drive)") + ": "
                      + ", ".join(f"{d.joint}: {d.function!r}" for d in model.drives))
     frames = dict(model.frames)
     link_index = {lk.name: k for k, lk in enumerate(model.links)}
