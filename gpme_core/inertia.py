@@ -21,6 +21,10 @@ from .errors import ModelError
 # 1e-12 * max|I| is far above that (~1e-15) and far below any physical principal moment
 # worth keeping (a real body thinner than 1e-6 of its size in two directions).
 _INERTIA_TOL = 1e-12
+# m: a moment of inertia below mass * POINT_SIZE^2 is that of a body smaller than a micron,
+# indistinguishable from a point mass; such moments are accepted whatever their sign
+# (URDFs write point masses as 'ixz="2.4e-35"').
+POINT_SIZE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -76,7 +80,7 @@ class RigidBodyInertia:
             out.append(f"{label}: inertia tensor must be symmetric, got {inertia.tolist()}")
             return out
         eig = np.linalg.eigvalsh(inertia)
-        tol = _INERTIA_TOL * abs(eig).max()
+        tol = max(_INERTIA_TOL * abs(eig).max(), m * POINT_SIZE ** 2 if m > 0 else 0.0)
         if eig.min() < -tol:
             out.append(f"{label}: inertia tensor must be positive definite or semi-definite "
                        f"(no negative principal moment), got principal moments {eig.tolist()} "

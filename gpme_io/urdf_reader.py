@@ -184,29 +184,26 @@ class _Notes:
     def lines(self) -> tuple:
         out = []
         for key, names in self._names.items():
-            what, why = _NOTE_TEXT[key]
-            out.append(f"{what} on {len(names)} {_plural(key, len(names))} ignored ({why}): "
+            n = len(names)
+            out.append(_NOTE_TEXT[key].format(n=n, s="" if n == 1 else "s")
                        + ", ".join(names))
         return tuple(out + self._free)
 
 
 _NOTE_TEXT = {
-    "friction": ("<dynamics friction>", "gpme has no Coulomb friction"),
-    "effort": ("effort/velocity <limit>", "gpme has no actuator limits"),
-    "safety": ("<safety_controller>", "controller settings, not dynamics"),
-    "calibration": ("<calibration>", "encoder reference, not dynamics"),
-    "mimic_fixed": ("<mimic>", "a fixed joint does not move"),
-    "visual": ("<visual>/<collision>", "geometry; gpme needs only mass properties"),
-    "tags": ("extension tags", "not URDF dynamics"),
+    "friction": "<dynamics friction> on {n} joint{s} ignored (gpme has no Coulomb friction): ",
+    "effort": "effort/velocity <limit> on {n} joint{s} ignored (gpme has no actuator limits): ",
+    "equal_limits": "<limit lower == upper> on {n} joint{s} read as no range (unlimited; "
+                    "URDF's default lower = upper = 0 when a <limit> gives only effort and "
+                    "velocity): ",
+    "safety": "<safety_controller> on {n} joint{s} ignored (controller settings, not "
+              "dynamics): ",
+    "calibration": "<calibration> on {n} joint{s} ignored (encoder reference, not dynamics): ",
+    "mimic_fixed": "<mimic> on {n} joint{s} ignored (a fixed joint does not move): ",
+    "visual": "<visual>/<collision> on {n} link{s} ignored (geometry; gpme needs only mass "
+              "properties): ",
+    "tags": "extension elements of {n} kind{s} ignored (not URDF dynamics): ",
 }
-
-
-def _plural(key: str, n: int) -> str:
-    if key in ("visual",):
-        return "link" if n == 1 else "links"
-    if key == "tags":
-        return "element kind" if n == 1 else "element kinds"
-    return "joint" if n == 1 else "joints"
 
 
 def _floats(text, count, label, problems, default):
@@ -294,6 +291,7 @@ def _read_limits(el, jtype, label, problems, notes):
                         "(lower == upper is read as no range)")
         return (-np.inf, np.inf), (lo, hi)
     if lo == hi:
+        notes.add("equal_limits", el.get("name"))
         return (-np.inf, np.inf), (lo, hi)
     return (-np.inf if lo <= -UNLIMITED else lo, np.inf if hi >= UNLIMITED else hi), (lo, hi)
 
@@ -368,7 +366,9 @@ def _read_joint(el, link_names, problems, notes):
 
 
 def _parse(robot, problems, notes):
-    """(link names, {link: inertia or None}, [joints], {link: has mass problem}) of <robot>."""
+    """(link names, {link: inertia or None}, [joints], {link: [<inertial> problems]}) of
+    <robot>; the caller decides whether an <inertial> problem matters (not on a link fixed
+    to the world, whose mass is dropped)."""
     if robot.tag != "robot":
         problems.append(f"the root element must be <robot>, got <{robot.tag}>")
     for child in robot:
@@ -381,12 +381,12 @@ def _parse(robot, problems, notes):
     dup = sorted({n for n in link_names if n is not None and link_names.count(n) > 1})
     if dup:
         problems.append(f"link names repeat: {dup}")
-    inertias, bad_inertia = {}, set()
+    inertias, bad_inertia = {}, {}
     for el in link_els:
-        n_before = len(problems)
-        inertias[el.get("name")] = _read_inertial(el, problems)
-        if len(problems) > n_before:
-            bad_inertia.add(el.get("name"))
+        bad = []
+        inertias[el.get("name")] = _read_inertial(el, bad)
+        if bad:
+            bad_inertia[el.get("name")] = bad
         if el.find("visual") is not None or el.find("collision") is not None:
             notes.add("visual", el.get("name"))
         for child in el:
@@ -421,6 +421,9 @@ def _tree(links, joints, problems):
                                 f"({parent_joint[j.child].name!r}, {j.name!r})")
             parent_joint[j.child] = j
     roots = [n for n in links if n not in parent_joint]
+    if not links:
+        problems.append("the URDF has no <link>")
+        return None
     if len(roots) != 1:
         problems.append(f"the URDF must have exactly one root link (a link that is no joint's "
                         f"child), found {roots}")
@@ -785,7 +788,7 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
     tree = _tree(links, joints, problems)
     picked = _select_chain(tree, chain, frozen, problems) if tree is not None else None
     if picked is None:
-        _fail(source, problems)
+        _fail(source, [p for bad in bad_inertia.values() for p in bad] + problems)
     root, tip, chain_joints = picked
     above = _path(tree, tree.root, root)
     values = _frozen_values(tree, joints, chain_joints, above, frozen, problems, notes)
@@ -808,6 +811,14 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
                 attached.setdefault(owner[link], []).append(j.child)
             stack.append(j.child)
     chain_links = [j.child for j in chain_joints]
+    world_fixed_bad = [lk for lk in bad_inertia if owner.get(lk) == -1]
+    for lk, bad in bad_inertia.items():
+        if lk not in world_fixed_bad:
+            problems.extend(bad)
+    if world_fixed_bad:
+        notes.line("invalid <inertial> on links fixed to the world ignored (they do not move, "
+                   "their mass is dropped): " + "; ".join(
+                       p for lk in world_fixed_bad for p in bad_inertia[lk]))
 
     dropped = [f"{lk} ({inertias[lk].mass:g} kg)" for lk in owner
                if owner[lk] == -1 and inertias.get(lk) is not None]
@@ -897,7 +908,7 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
         model = _with_flexible_records(model, side_flex, flexible)
     except ModelError as exc:
         suffix = (" (found with the invalid <inertial> elements above left out)"
-                  if bad_inertia else "")
+                  if set(bad_inertia) - set(world_fixed_bad) else "")
         problems += [p + suffix for p in exc.problems]
     except TypeError as exc:
         problems.append(str(exc))
