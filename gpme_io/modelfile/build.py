@@ -227,11 +227,13 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
     q_dot0 = np.zeros(model.n_coordinates)
     for name, v in spec.initial.q_dot.items():
         q_dot0[model.index(name)] = v
+    flex = sorted(_flexible_coordinates(model), key=model.index)
     if spec.initial.static_flexible:
-        flex = sorted(_flexible_coordinates(model), key=model.index)
         q0 = static_equilibrium(model, q0, flex)
         notes.append(f"initial: {len(flex)} flexible coordinates in their static sag under "
-                     "gravity (static_flexible = true)")
+                     "gravity (static_flexible = true)"
+                     + (", computed again at the pose placed on the constraints"
+                        if spec.initial.on_constraints else ""))
     _check_finite_at(spec, model, q0, label)
     if system.dependent is None:
         chosen = system.choose_dependent(0.0, q0, q_dot0)
@@ -240,6 +242,10 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                          "the constraint Jacobian at q0 (give [solver] dependent to fix them)")
     if spec.initial.on_constraints:
         q0, q_dot0 = _on_constraints(system, q0, q_dot0, label)
+        if spec.initial.static_flexible:
+            # the sag of the placed pose, then placed again (the sag moves the frames a little)
+            q0 = static_equilibrium(model, q0, flex)
+            q0, q_dot0 = _on_constraints(system, q0, q_dot0, label)
         _check_finite_at(spec, model, q0, label)
     run = spec.run
     dt = run.dt
