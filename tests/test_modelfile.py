@@ -543,3 +543,18 @@ def test_the_example_of_docs_models_md_loads_and_runs(tmp_path):
     # started on the constraints; RK4 at the suggested step keeps them to round-off level
     # (measured 2e-11 m after 0.05 s); a wrong kappa would show as ~1e-5
     assert df[["height", "circle"]].abs().max().max() < 1e-9
+
+
+def test_urdf_names_are_checked_by_the_reader_and_a_chain_link_can_be_a_frame(tmp_path):
+    base = (DATA / "arm3.toml").read_text().replace('urdf = "arm3.urdf"',
+                                                    f'urdf = "{DATA / "arm3.urdf"}"')
+    bad = base + ('\n[[flexible]]\nlink = "fore_arm"\nsection = { shape = "circle", '
+                  'diameter = 0.02 }\nyoungs_modulus = 1e9\nshear_modulus = 4e8\n'
+                  'density = 1000.0\nsegments = 1\nbending_viscosity = 0.0\n')
+    with pytest.raises(ModelFileError, match=r"model\.urdf \(.*arm3\.urdf\): .*fore_arm"):
+        load_model_file(write(tmp_path, bad, "bad.toml"))
+    # the elbow's link 'forearm' is no fixed frame of the URDF: its joint frame is used
+    good = base.replace('frame = "tool"', 'frame = "forearm"')
+    s = load_model_file(write(tmp_path, good, "good.toml"))
+    assert s.model.frames["forearm"].link_index == s.model.index("elbow")
+    assert any("frame 'forearm' is the frame of link 'forearm'" in n for n in s.notes)
