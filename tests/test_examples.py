@@ -1,0 +1,48 @@
+"""The README's "your own robot" section runs as written: its model file is the one in
+examples/, and `gpme verify --quick --model` on it passes (exit status 0)."""
+import re
+from pathlib import Path
+
+import pytest
+
+from gpme import cli
+
+REPO = Path(__file__).resolve().parent.parent
+EXAMPLE = REPO / "examples" / "my_arm" / "my_arm.toml"
+
+
+def _without_leading_comments(text):
+    lines = text.splitlines()
+    while lines and lines[0].startswith("#"):
+        lines.pop(0)
+    return "\n".join(lines).strip()
+
+
+def test_readme_shows_the_example_model_file():
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## Your own robot"):]
+    block = re.search(r"```toml\n(.*?)```", section, re.S).group(1).strip()
+    assert block == _without_leading_comments(EXAMPLE.read_text())
+    assert "gpme verify --quick --model examples/my_arm/my_arm.toml" in section
+    assert len(block.splitlines()) <= 30
+
+
+def test_readme_command_passes(tmp_path, monkeypatch):
+    monkeypatch.chdir(REPO)
+    status = cli.main(["verify", "--quick", "--no-progress", "--out", str(tmp_path),
+                       "--model", "examples/my_arm/my_arm.toml"])
+    assert status == 0
+    run = tmp_path / "latest"
+    for name in ("index.html", "summary.json", "gpme.csv", "pinocchio.csv", "mujoco.csv",
+                 "runs/my_arm.csv"):
+        assert (run / name).is_file(), name
+
+
+def test_bad_model_file_exits_2_with_the_key(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(EXAMPLE.read_text().replace('urdf = "my_arm.urdf"', 'urdf = "missing.urdf"')
+                   .replace("[run]", "[run]\nt_ned = 3.0"))
+    assert cli.main(["simulate", "--no-progress", "--model", str(bad), "--out",
+                     str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "missing.urdf" in err and "t_ned" in err
