@@ -1,5 +1,7 @@
 """`gpme sweep`: its arguments and their translation into a sweep spec (the command line
-overrides what a --config file says), then the run, the table and the plots.
+overrides what a --config file says), then the run, the table and the plots.  Without
+--model (and without ``model`` in the --config file) the built-in crane is swept; with it,
+the given model file (parameters are paths into it, gpme_study.model_paths).
 
 Imports only argparse at module level, so building the `gpme` parser stays fast.
 """
@@ -14,6 +16,10 @@ def add_arguments(parser):
     """The `gpme sweep` options on an argparse (sub)parser."""
     parser.add_argument("--config", metavar="FILE",
                         help="TOML or YAML sweep file (docs/sweep.md); options below override it")
+    parser.add_argument("--model", default=None, metavar="FILE",
+                        help="sweep this model file (docs/models.md) instead of the built-in "
+                             "crane; --param PATH=VALUES with dotted paths into it, e.g. "
+                             "joint.shoulder.stiffness=10:40:4")
     parser.add_argument("--mode", choices=("grid", "list", "lhs"), default=None,
                         help="grid (default), list (with --point) or lhs (Latin hypercube)")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
@@ -37,6 +43,9 @@ def add_arguments(parser):
                         help="Hz, lower edge of the vibration band (default 2)")
     parser.add_argument("--phi-tolerance", type=float, default=None,
                         help="largest |Phi| after the transient counted as met (default 1e-3)")
+    parser.add_argument("--on-constraints", action="store_true", default=None,
+                        help="with --model: start every point on its constraints "
+                             "([initial] on_constraints = true)")
     parser.add_argument("--limit", action="append", default=[], metavar="METRIC=MAX",
                         help="safe-region bound, e.g. vib_peak_m=1e-4 drive_psi3_peak_Nm=6")
     parser.add_argument("--plot-x", default=None, help="heat-map x parameter")
@@ -48,6 +57,9 @@ def add_arguments(parser):
                              "(default: a local cluster)")
     parser.add_argument("--workers", type=int, default=None,
                         help="local cluster worker processes (default: one per core)")
+    parser.add_argument("--in-process", action="store_true",
+                        help="run the points one after another in this process, without Dask "
+                             "(tiny sweeps, debugging)")
     parser.add_argument("--retry-errors", action="store_true",
                         help="recompute stored points whose status is 'error'")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -68,8 +80,15 @@ def _pairs(items, flag, problems):
 def spec_dict(args, problems):
     """The raw sweep dict of ``args``: the --config file's, overridden by the options;
     problems with the options themselves are appended to ``problems``."""
+    from pathlib import Path
+
     from .spec import read_spec_file
     data = read_spec_file(args.config) if args.config else {}
+    model = getattr(args, "model", None)
+    if model:
+        data["model"] = str(Path(model).resolve())
+    elif isinstance(data.get("model"), str):     # relative to the sweep file
+        data["model"] = str((Path(args.config).parent / data["model"]).resolve())
     if args.mode:
         data["mode"] = args.mode
     elif args.point and "mode" not in data:
@@ -87,6 +106,8 @@ def spec_dict(args, problems):
     for attr, key in RUN_FLAGS.items():
         if getattr(args, attr) is not None:
             run[key] = getattr(args, attr)
+    if getattr(args, "on_constraints", None):
+        run["on_constraints"] = True
     if run:
         data["run"] = run
     if args.limit:
@@ -102,6 +123,9 @@ def spec_dict(args, problems):
         problems.append(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         problems.append("--workers sizes the local cluster; it cannot be used with --scheduler")
+    if getattr(args, "in_process", False) and (args.scheduler or args.workers is not None):
+        problems.append("--in-process runs without Dask; it cannot be used with --scheduler "
+                        "or --workers")
     return data
 
 
@@ -128,8 +152,17 @@ def main(args):
     atomic_write_text(out / "sweep_spec.json", json.dumps(data, indent=1, default=str))
     report = None if args.quiet else (lambda line: print(line, flush=True))
     table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
-                      retry_errors=args.retry_errors, report=report)
-    paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
+                      retry_errors=args.retry_errors, report=report,
+                      in_process=getattr(args, "in_process", False))
+    if spec.model is None:
+        paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
+    else:
+        from .model_metrics import heat_map_metrics
+        units = {name: spec.model.unit(name) for name in spec.swept}
+        units.update({name: v[0] for name, v in spec.metric_table.items()})
+        paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits,
+                            metrics=heat_map_metrics(spec.metric_table, spec.limits),
+                            units=units, parameters=spec.swept)
     counts = table["status"].value_counts().to_dict()
     print(f"{len(table)} points: {counts}; computed {table.attrs['computed']} in "
           f"{table.attrs['wall_time_s']:.1f} s; table {out / 'results.csv'} (+ .parquet)")

@@ -5,7 +5,11 @@ When the (x, y) points form a full grid the map is a cell plot; otherwise (Latin
 lists) a scatter plot coloured the same way.  Parameters other than x and y that vary are
 reduced per (x, y) cell to the worst case: the largest metric value, and "infeasible" when
 any point of the cell failed.
+
+``units`` ({column: unit}) and ``parameters`` (the parameter columns) describe a table that
+is not the crane's (a model-file sweep); without them the crane's names are used.
 """
+import re
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +17,6 @@ import pandas as pd
 
 from gpme_core.atomic import atomic_save_figure
 
-from .metrics import METRICS
 from .spec import PARAMETERS, unit_of
 
 HEAT_MAP_METRICS = ("vib_peak_m", "dev_peak_m", "flex_peak_rad", "psi3_dev_peak_rad",
@@ -25,9 +28,20 @@ _LABELS = {"amplitude": "amplitude A", "period": "period T", "ellipse_a": "ellip
            "ellipse_b": "ellipse b", "steel_youngs_modulus": "Young's modulus E"}
 
 
-def axis_label(name):
-    unit = unit_of(name)
+def _unit(name, units=None):
+    if units is not None and name in units:
+        return units[name]
+    return unit_of(name)
+
+
+def axis_label(name, units=None):
+    unit = _unit(name, units)
     return f"{_LABELS.get(name, name)}" + (f" ({unit})" if unit and unit != "1" else "")
+
+
+def file_stem(name):
+    """A file-name-safe form of a metric name (constraint and joint names come from files)."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
 
 
 def feasible(table):
@@ -73,14 +87,14 @@ def _as_grid(cells, x, y, column):
     return xs, ys, grid.to_numpy()
 
 
-def heat_map(table, x, y, metric, limits=None):
+def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
     """Figure: ``metric`` over parameters x, y; infeasible cells grey with a cross, the
     contour metric = limit drawn when ``limits`` bounds this metric."""
     from matplotlib.figure import Figure
     cells = cell_table(table, x, y, metric)
     fig = Figure(figsize=(6.4, 4.8))
     ax = fig.subplots()
-    unit = METRICS[metric][0]
+    unit = _unit(metric, units)
     label = f"{metric} ({unit})"
     grid = _as_grid(cells, x, y, "_value")
     bad = cells[~cells["_feasible"]]
@@ -114,10 +128,11 @@ def heat_map(table, x, y, metric, limits=None):
         fig.colorbar(sc, ax=ax, label=label)
         if len(bad):
             ax.scatter(bad[x], bad[y], marker="x", c="k", s=40, label="infeasible")
-    others = [p for p in table.columns if p in PARAMETERS and p not in (x, y)
+    params = PARAMETERS if parameters is None else parameters
+    others = [p for p in table.columns if p in params and p not in (x, y)
               and table[p].nunique() > 1]
-    ax.set_xlabel(axis_label(x))
-    ax.set_ylabel(axis_label(y))
+    ax.set_xlabel(axis_label(x, units))
+    ax.set_ylabel(axis_label(y, units))
     title = f"{metric}" + (f" (max over {', '.join(others)})" if others else "")
     ax.set_title(title, fontsize=10)
     if len(bad):
@@ -136,7 +151,7 @@ def _mark_infeasible_cells(ax, bad, x, y, x_edges, y_edges, xs, ys):
                                label="infeasible" if k == 0 else None))
 
 
-def safe_region(table, x, y, limits):
+def safe_region(table, x, y, limits, units=None):
     """Figure: each (x, y) safe (all points feasible and within every limit), over a limit,
     or infeasible; the title lists the limits."""
     from matplotlib.figure import Figure
@@ -158,15 +173,16 @@ def safe_region(table, x, y, limits):
     handles = [Patch(color=c, label=lab) for c, lab in
                zip(colours, ("safe", "over a limit", "infeasible"))]
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.8)
-    ax.set_xlabel(axis_label(x))
-    ax.set_ylabel(axis_label(y))
-    text = ", ".join(f"{k} <= {v:g} {METRICS[k][0]}" for k, v in limits.items())
+    ax.set_xlabel(axis_label(x, units))
+    ax.set_ylabel(axis_label(y, units))
+    text = ", ".join(f"{k} <= {v:g} {_unit(k, units)}" for k, v in limits.items())
     ax.set_title(f"safe region: {text}", fontsize=9)
     fig.tight_layout()
     return fig
 
 
-def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS):
+def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS, units=None,
+                parameters=None):
     """heatmap_<metric>.png for each metric with a finite value and safe_region.png (when
     limits are given) into <out_dir>/plots; returns {name: path}.  Needs two swept axes."""
     if x is None or y is None or table.empty:
@@ -175,10 +191,12 @@ def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS):
     paths = {}
     table = pd.DataFrame(table)
     for metric in metrics:
-        if metric in table and table[metric].notna().any():
-            paths[f"heatmap_{metric}.png"] = out / f"heatmap_{metric}.png"
-            atomic_save_figure(heat_map(table, x, y, metric, limits), paths[f"heatmap_{metric}.png"])
+        if metric in table and pd.to_numeric(table[metric], errors="coerce").notna().any():
+            name = f"heatmap_{file_stem(metric)}.png"
+            paths[name] = out / name
+            atomic_save_figure(heat_map(table, x, y, metric, limits, units, parameters),
+                               paths[name])
     if limits:
         paths["safe_region.png"] = out / "safe_region.png"
-        atomic_save_figure(safe_region(table, x, y, limits), paths["safe_region.png"])
+        atomic_save_figure(safe_region(table, x, y, limits, units), paths["safe_region.png"])
     return paths

@@ -2,7 +2,10 @@
 
 By default a LocalCluster is started with one single-threaded worker process per core (no
 set-up); given a scheduler address (``tcp://host:8786``) the points go to that existing
-cluster instead, whose workers must import the same gpme_core and gpme_study.  Finished
+cluster instead, whose workers must import the same gpme_core and gpme_study.  With
+``in_process=True`` the points run one after another in the calling process, without Dask
+(tiny sweeps, tests, a debugger).  The crane's points run gpme_study.point.run_point, a
+model file's gpme_study.model_point.run_model_point.  Finished
 points are stored one by one (gpme_study.store), so an interrupted sweep resumes where it
 stopped; a point that fails is a row with its status and error, never a stopped sweep.
 """
@@ -18,6 +21,15 @@ from gpme_core.atomic import atomic_write_bytes, atomic_write_text
 
 from .point import point_key, run_point
 from .store import ResultStore
+
+
+def point_job(spec):
+    """(key function, point function, leading arguments) of ``spec``'s points:
+    key(*args, point, settings) and run(*args, point, settings)."""
+    if spec.model is None:
+        return point_key, run_point, ()
+    from .model_point import model_point_key, run_model_point
+    return model_point_key, run_model_point, (spec.model,)
 
 TABLE_CSV = "results.csv"
 TABLE_PARQUET = "results.parquet"
@@ -36,7 +48,7 @@ def _client(scheduler, n_workers):
 
 
 def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
-              report=print):
+              report=print, in_process=False):
     """Run every point of ``spec`` (a gpme_study.spec.SweepSpec) not yet in ``out_dir``.
 
     scheduler    : address of an existing Dask scheduler, or None for a local cluster
@@ -44,6 +56,7 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     retry_errors : recompute stored points whose status is 'error' (an unexpected failure,
                    e.g. a lost worker; 'infeasible', 'diverged', 'invalid' are kept)
     report       : callable taking one progress line (str), or None
+    in_process   : run the points here, one after another, without Dask
     Returns the table (one row per point, in spec order; see gpme_study.point.run_point)
     and writes it as <out_dir>/results.csv and results.parquet; df.attrs holds the counts
     and the wall time of this call.
@@ -51,7 +64,8 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     out = Path(out_dir)
     store = ResultStore(out)
     report = report or (lambda line: None)
-    keys = [point_key(p, spec.run) for p in spec.points]
+    key_of, run, args = point_job(spec)
+    keys = [key_of(*args, p, spec.run) for p in spec.points]
     pending = {}
     for key, point in zip(keys, spec.points):
         row = store.load(key)
@@ -62,8 +76,14 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
            f"{len(pending)} to run")
     start = time.perf_counter()
     n_workers_used = 0
-    if pending:
-        n_workers_used = _compute(pending, spec.run, store, scheduler, n_workers, report)
+    if pending and in_process:
+        n_workers_used = 0
+        for done, (key, point) in enumerate(pending.items(), 1):
+            row = run(*args, point, spec.run)
+            store.save(row)
+            _report_point(report, done, len(pending), key, row)
+    elif pending:
+        n_workers_used = _compute(pending, spec, store, scheduler, n_workers, report)
     wall = time.perf_counter() - start
     table = assemble_table(spec, keys, store)
     table.attrs.update(points=len(spec.points), computed=len(pending), cached=n_cached,
@@ -73,13 +93,20 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     return table
 
 
-def _compute(pending, settings, store, scheduler, n_workers, report):
+def _report_point(report, done, total, key, row):
+    report(f"[{done}/{total}] {key} {row['status']}"
+           + (f" {row.get('wall_time_s', float('nan')):.1f} s" if row["status"] == "ok"
+              else f": {row['error'][:120]}"))
+
+
+def _compute(pending, spec, store, scheduler, n_workers, report):
     from dask.distributed import as_completed
+    _, run, args = point_job(spec)
     client = _client(scheduler, n_workers)
     try:
         n_workers_used = len(client.scheduler_info().get("workers", {}))
         report(f"dask: {n_workers_used} workers at {client.scheduler.address}")
-        futures = {client.submit(run_point, point, settings, key=f"gpme-point-{key}",
+        futures = {client.submit(run, *args, point, spec.run, key=f"gpme-point-{key}",
                                  pure=False): key for key, point in pending.items()}
         done = 0
         for fut in as_completed(futures):
@@ -91,9 +118,7 @@ def _compute(pending, settings, store, scheduler, n_workers, report):
                        "error": f"{type(exc).__name__}: {exc}"}
             store.save(row)
             done += 1
-            report(f"[{done}/{len(pending)}] {key} {row['status']}"
-                   + (f" {row.get('wall_time_s', float('nan')):.1f} s" if row["status"] == "ok"
-                      else f": {row['error'][:120]}"))
+            _report_point(report, done, len(pending), key, row)
     finally:
         cluster = getattr(client, "_gpme_own_cluster", None)
         client.close()
@@ -106,7 +131,6 @@ def assemble_table(spec, keys, store):
     """The table in spec order: key, status, error, failed_run, every parameter of the
     spec (values from the spec: a stored row may come from an equal point written with
     other names swept), the metrics, then the remaining columns."""
-    from .metrics import METRICS
     params = []
     for point in spec.points:
         params += [nm for nm in point if nm not in params]
@@ -115,7 +139,7 @@ def assemble_table(spec, keys, store):
         row = store.load(key)
         if row is not None:
             rows.append({**row, **point})
-    head = ["key", "status", "error", "failed_run"] + params + list(METRICS)
+    head = ["key", "status", "error", "failed_run"] + params + list(spec.metric_table)
     table = pd.DataFrame(rows)
     for col in head:
         if col not in table:

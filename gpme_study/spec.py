@@ -29,6 +29,10 @@ is validated once, here: :class:`SweepSpecError` lists every problem found.  Sch
 
 Parameter names are CraneParameters fields (amplitude, period, ellipse_a, ...) or the
 aliases in :data:`ALIASES` (A, T, a, b, E, ...), plus n_rfe.  Tables use the field names.
+
+With a top-level ``model = "path/to/file.toml"`` (relative to the sweep file) the sweep runs
+that model file instead of the built-in crane: parameters are dotted paths into the file
+and the run settings and metrics are generic (gpme_study.model_spec).
 """
 import dataclasses
 import itertools
@@ -71,7 +75,8 @@ PARAMETERS = {
 }
 RUN_DEFAULTS = {"t_end": 6.0, "n_rfe": 1, "transient": 1.0, "output_dt": 2e-3, "dt": 0.0,
                 "min_frequency_hz": 2.0, "phi_tolerance": 1e-3}
-TOP_KEYS = ("mode", "parameters", "points", "samples", "seed", "run", "limits", "plot")
+TOP_KEYS = ("mode", "parameters", "points", "samples", "seed", "run", "limits", "plot",
+            "model")
 # more points than this is almost certainly a typo in a grid (hours of runs per point)
 MAX_POINTS = 100_000
 
@@ -109,6 +114,11 @@ class SweepSpec:
     points : tuple of dicts {field name: value}, only the values that differ from
              CraneParameters() defaults by being swept; n_rfe always present (int)
     swept  : names (field names, n_rfe) that vary over the points
+    model  : None for the built-in crane; for a model-file sweep its
+             gpme_study.model_paths.ModelDocument (points are then {path: value} and run
+             is a gpme_study.model_spec.ModelRunSettings)
+    metrics: {column: (unit, definition, can be bounded)} of the table (None: the crane's
+             gpme_study.metrics.METRICS)
     """
 
     mode: str
@@ -118,6 +128,13 @@ class SweepSpec:
     limits: dict = field(default_factory=dict)
     plot_x: str = None
     plot_y: str = None
+    model: object = None
+    metrics: object = None
+
+    @property
+    def metric_table(self):
+        """{column: (unit, definition, can be bounded)} of this sweep's metrics."""
+        return METRICS if self.metrics is None else self.metrics
 
 
 def canonical(name):
@@ -134,8 +151,9 @@ def unit_of(name):
 
 
 def load_spec(path):
-    """SweepSpec from a TOML (.toml) or YAML (.yaml, .yml) file."""
-    return spec_from_dict(read_spec_file(path))
+    """SweepSpec from a TOML (.toml) or YAML (.yaml, .yml) file (a ``model`` path in it is
+    relative to the file's folder)."""
+    return spec_from_dict(read_spec_file(path), base_dir=Path(path).parent)
 
 
 def read_spec_file(path):
@@ -243,10 +261,36 @@ def _check_name(name, where, problems):
     return c
 
 
-def spec_from_dict(data):
-    """Validated :class:`SweepSpec` from a dict of the schema in the module docstring."""
-    problems = []
+class CraneSpace:
+    """The parameters of the built-in crane sweep: CraneParameters fields and n_rfe.  A
+    model-file sweep has its own space (gpme_study.model_spec.ModelSpace) with the same
+    three methods."""
+
+    def name(self, name, where, problems):
+        """The table name of parameter ``name``, or None (a problem is appended)."""
+        return _check_name(name, where, problems)
+
+    def check(self, name, value, where, problems):
+        """Append a problem when ``value`` is not valid for parameter ``name``."""
+        _check_value(name, value, where, problems)
+
+    def is_integer(self, name):
+        return name == "n_rfe"
+
+
+CRANE = CraneSpace()
+
+
+def spec_from_dict(data, base_dir=None):
+    """Validated :class:`SweepSpec` from a dict of the schema in the module docstring.
+
+    base_dir : folder a relative ``model`` path is taken from (default: the current one)
+    """
     data = dict(data or {})
+    if "model" in data:
+        from .model_spec import model_spec_from_dict
+        return model_spec_from_dict(data, base_dir)
+    problems = []
     for key in data:
         if key not in TOP_KEYS:
             problems.append(f"unknown key {key!r}; valid keys: {list(TOP_KEYS)}")
@@ -327,13 +371,13 @@ def _run_settings(run, problems):
     return RunSettings(**v)
 
 
-def _grid_points(parameters, problems):
+def _grid_points(parameters, problems, space=CRANE):
     if not parameters:
         problems.append("mode 'grid' needs at least one parameter in 'parameters'")
         return []
     axes = {}
     for name, value in parameters.items():
-        c = _check_name(name, f"parameters.{name}", problems)
+        c = space.name(name, f"parameters.{name}", problems)
         if c is None:
             continue
         if c in axes:
@@ -345,7 +389,7 @@ def _grid_points(parameters, problems):
     return [dict(zip(names, combo)) for combo in itertools.product(*axes.values())]
 
 
-def _lhs_points(parameters, samples, seed, problems):
+def _lhs_points(parameters, samples, seed, problems, space=CRANE):
     if not parameters:
         problems.append("mode 'lhs' needs at least one parameter range in 'parameters'")
     if samples is None or isinstance(samples, bool) or not isinstance(samples, (int, float)) \
@@ -358,7 +402,7 @@ def _lhs_points(parameters, samples, seed, problems):
         seed = None
     ranges = {}
     for name, value in (parameters or {}).items():
-        c = _check_name(name, f"parameters.{name}", problems)
+        c = space.name(name, f"parameters.{name}", problems)
         if c is None:
             continue
         r = _range(name, value, problems)
@@ -373,7 +417,7 @@ def _lhs_points(parameters, samples, seed, problems):
     for row in u:
         pt = {}
         for (name, (lo, hi)), uk in zip(ranges.items(), row):
-            if name == "n_rfe":     # integers lo..hi, each with equal probability
+            if space.is_integer(name):     # integers lo..hi, each with equal probability
                 pt[name] = float(min(int(hi), int(math.floor(lo + uk * (int(hi) - lo + 1)))))
             else:
                 pt[name] = float(lo + uk * (hi - lo))
@@ -381,7 +425,7 @@ def _lhs_points(parameters, samples, seed, problems):
     return points
 
 
-def _list_points(points, problems):
+def _list_points(points, problems, space=CRANE):
     if not isinstance(points, (list, tuple)) or not points:
         problems.append(f"mode 'list' needs points = a non-empty list of tables, got {points!r}")
         return []
@@ -392,7 +436,7 @@ def _list_points(points, problems):
             continue
         clean = {}
         for name, value in pt.items():
-            c = _check_name(name, f"point {k}", problems)
+            c = space.name(name, f"point {k}", problems)
             if c is None:
                 continue
             try:
@@ -413,14 +457,15 @@ def _swept(points):
                  if len({json.dumps(pt.get(nm)) for pt in points}) > 1 or nm != "n_rfe")
 
 
-def _limits(limits, problems):
+def _limits(limits, problems, metrics=METRICS):
     if not isinstance(limits, dict):
         problems.append(f"limits must be a table metric = largest value, got {limits!r}")
         return {}
     out = {}
     for name, value in limits.items():
-        if name not in METRICS or not METRICS[name][2]:
-            valid = sorted(k for k, v in METRICS.items() if v[2])
+        if name not in metrics or not metrics[name][2]:
+            valid = [k for k, v in metrics.items() if v[2]]
+            valid = sorted(valid) if metrics is METRICS else valid
             problems.append(f"limits.{name}: not a metric that can be bounded; valid: {valid}")
             continue
         try:
@@ -430,18 +475,18 @@ def _limits(limits, problems):
             continue
         if not (math.isfinite(out[name]) and out[name] >= 0):
             problems.append(f"limits.{name} must be finite and >= 0 "
-                            f"({METRICS[name][0]}), got {value!r}")
+                            f"({metrics[name][0]}), got {value!r}")
     return out
 
 
-def _plot_axes(plot, swept, problems):
+def _plot_axes(plot, swept, problems, space=CRANE):
     if not isinstance(plot, dict) or set(plot) - {"x", "y"}:
         problems.append(f"plot must be a table with keys x, y, got {plot!r}")
         return None, None
     axes = []
     for key in ("x", "y"):
         if key in plot:
-            c = _check_name(plot[key], f"plot.{key}", problems)
+            c = space.name(plot[key], f"plot.{key}", problems)
             if c is not None and swept and c not in swept:
                 problems.append(f"plot.{key} = {plot[key]!r} is not swept; swept: {list(swept)}")
             axes.append(c)
