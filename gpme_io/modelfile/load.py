@@ -36,7 +36,7 @@ ROBOT_DATA_PREFIX = "example-robot-data:"
 ROBOT_DATA_DISTRIBUTION = "example-robot-data"
 ROBOT_DATA_ROOT = "cmeel.prefix/share/example-robot-data/robots/"
 ROBOTS_EXTRA_HINT = "install the optional extra: pip install -e '.[robots]'"
-TOLERANCE_ENGINES = ("pinocchio", "mujoco")
+TOLERANCE_ENGINES = ("gpme", "pinocchio", "mujoco")   # gpme: the run checks (crosscheck.run_checks)
 DEFAULT_BAUMGARTE = (20.0, 20.0)
 QUICK_T_END = 1.0           # s, default quick_t_end = min(t_end, 1 s)
 DEFAULT_OUTPUT_DT = 1e-3    # s
