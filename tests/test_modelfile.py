@@ -372,7 +372,7 @@ BAD = [
     ("tolerance-engine", dict(extra='[[tolerance]]\ncheck = "drake/M"\nabs = 1e-12\n'
                                     'rel = 1e-10\nreason = "r"\n'),
      r"tolerance\[0\]\.check: 'drake/M' must be \"<engine>/<quantity>\" with engine one of "
-     r"pinocchio, mujoco"),
+     r"gpme, pinocchio, mujoco"),
     ("tolerance-negative", dict(extra='[[tolerance]]\ncheck = "mujoco/E_kin"\nabs = -1.0\n'
                                       'rel = 0.0\nreason = "r"\n'),
      r"tolerance\[0\]\.abs: must be >= 0"),
