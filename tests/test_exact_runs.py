@@ -99,8 +99,9 @@ def test_observed_order_is_four(exact, case):
     s, refined, _, mj_df = exact(case)
     row = _rows("mujoco", s, refined, mj_df)[-1]
     assert row["status"] == "pass"
-    # measured: 3.13 (crane n = 1, z4, the least resolved column) and 4.00 (arm)
-    assert 3.0 <= row["gpme_value"] <= 4.5
+    # measured 4.00 on both (least resolved column: psi_arm_1, q2); the row's own gate is
+    # |p - 4| <= 1, here the stronger statement that the regime is cleanly asymptotic
+    assert 3.8 <= row["gpme_value"] <= 4.2
 
 
 def test_richardson_estimate_is_gpmes_actual_error():
