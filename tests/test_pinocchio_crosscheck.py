@@ -323,3 +323,12 @@ def test_this_pinocchio_fills_the_whole_mass_matrix(small):
     _, case, states = small
     raw = np.array(pin.crba(case.pin.model, case.pin.model.createData(), states[0].q))
     assert np.array_equal(raw, raw.T), "pin.crba no longer returns the whole matrix"
+
+
+def test_scenario_without_constraints_compares_the_free_terms():
+    s = small_scenario()
+    free = dataclasses.replace(s, name="small_free", constraints=(),
+                               system=ProgrammedMotion(s.model))
+    df = pc.compare_case(pc.direct_case(free), _states(free, 2))
+    assert (df["status"] == "pass").all()
+    assert set(df["quantity"]) == ALL_QUANTITIES - set(pc.CONSTRAINT_QUANTITIES)

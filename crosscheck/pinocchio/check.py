@@ -73,16 +73,24 @@ _ROUND_OFF = ("round-off only: both engines evaluate the same closed-form quanti
 _FORCE = ("round-off only: sums of products of inertia, transforms and velocities; normwise "
           "relative to the largest entry")
 EPS = np.finfo(float).eps
-# eps cond(M) is the first-order forward error of one backward-stable solve, an estimate
-# rather than a bound; two engines' errors add (x2) and the estimate gets a margin of 4
-# (the full crane run measured errors up to 1.5 eps cond(M) for the reactions): SOLVE_FACTOR = 8.
+# eps cond_2(X) is the first-order relative forward error, in the 2-norm, of one
+# backward-stable solve with X (an estimate rather than a bound).  The rows measure
+# max|dx| / max|x| <= sqrt(n) ||dx||_2 / ||x||_2, hence the factor sqrt(n); two engines'
+# errors add (x2) and the estimate's constant gets a margin of 4: SOLVE_FACTOR = 8.
 SOLVE_FACTOR = 8.0
-_SOLVE = ("linear solve with M (aba / KKT in Pinocchio, Cholesky / reduced GPME in gpme): "
-          "forward error ~eps cond(M) relative; an RFEM link makes M ill-conditioned "
-          "(element torsion inertias ~1e-9 kg m^2 beside kilograms of robot: cond(M) up to "
-          "~3e7 for the crane with n = 10); tol_rel = max(1e-12, 8 eps cond_2(M)) (x2 two "
-          "engines, x4 margin), here cond(M) = {cond:.1e}")
-_MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = 8 eps cond(M) "
+_SOLVE = ("linear solve with M (aba in Pinocchio, Cholesky in gpme): forward error ~eps "
+          "cond(M) relative; an RFEM link makes M ill-conditioned (element torsion inertias "
+          "~1e-9 kg m^2 beside kilograms of robot: cond(M) up to ~3e7 for the crane with "
+          "n = 10); tol_rel = max(1e-12, 8 sqrt(n) eps cond_2(M)) (sqrt(n): 2-norm to max-entry "
+          "error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, n = {n}")
+_SOLVE_CONSTRAINED = (
+    "constrained solve: Pinocchio's forwardDynamics (Cholesky of M, then of A M^-1 A^T), "
+    "error ~eps cond(M); gpme's reduced GPME solves L = [N^T M; A] (N = [I; Gamma], Gamma = "
+    "-A_dc^-1 A_ic), error ~eps cond(L), and cond(L) exceeds cond(M) where Gamma is large; "
+    "tol_rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))) (sqrt(n): 2-norm to "
+    "max-entry error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, "
+    "cond(L) = {cond_l:.1e}, n = {n}")
+_MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = tol_rel "
                "max|A^T lambda| ||A_dc^-T||_inf = {tol:.1e}")
 # Each tolerance: abs (in the quantity's unit, a floor for exact zeros such as h at rest)
 # and rel (normwise, to the largest entry of the Pinocchio value), with its reason.
@@ -117,27 +125,45 @@ CONSTRAINT_QUANTITIES = ("Phi", "Phi_dot", "constraint jacobian A", "constraint 
 FRAME_QUANTITIES = ("frame position", "frame velocity", "frame jacobian", "frame drift")
 
 
-def solve_tolerances(m, reactions, a_dc):
+def reduced_matrix(m, a, ic, dc):
+    """(n, n) L = [M[ic] + Gamma^T M[dc]; A], Gamma = -A_dc^-1 A_ic: the matrix of the
+    reduced GPME (paper eq. 7), built here from Pinocchio's M and the reference A only to
+    bound gpme's solve error by its condition number (not used for any compared value)."""
+    gamma = -np.linalg.solve(a[:, dc], a[:, ic])
+    return np.vstack([m[ic] + gamma.T @ m[dc], a])
+
+
+def solve_tolerances(m, reactions, a, ic, dc):
     """Tolerances of the SOLVED quantities at one state.
 
-    m (n, n) mass matrix, reactions (n,) A^T lambda (N, N m), a_dc (m, m) dependent
-    block of the constraint Jacobian.  rel = max(1e-12, 8 eps cond_2(M)) for all four;
-    the multipliers get abs = 8 eps cond(M) max|A^T lambda| ||A_dc^-T||_inf as well,
-    because lambda = A_dc^-T (A^T lambda)_dc can be small beside the reactions.
+    m (n, n) mass matrix, reactions (n,) A^T lambda (N, N m), a (k, n) constraint
+    Jacobian, ic / dc index arrays of the independent / dependent coordinates.
+    free q_ddot: rel = max(1e-12, 8 sqrt(n) eps cond_2(M)).  Constrained q_ddot, reactions
+    and multipliers: rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))), L the reduced GPME
+    matrix (:func:`reduced_matrix`); the multipliers get abs = rel max|A^T lambda|
+    ||A_dc^-T||_inf as well, because lambda = A_dc^-T (A^T lambda)_dc can be small beside
+    the reactions.
     """
+    n = m.shape[0]
+    factor = SOLVE_FACTOR * np.sqrt(n) * EPS
     cond = float(np.linalg.cond(m))
-    rel = max(1e-12, SOLVE_FACTOR * EPS * cond)
-    reason = _SOLVE.format(cond=cond)
-    lam_abs = 0.0
-    if a_dc.size:
-        lam_abs = rel * float(np.max(np.abs(reactions))) * float(
-            np.linalg.norm(np.linalg.inv(a_dc).T, np.inf))
-    return {"free q_ddot": Tolerance(1e-12, rel, reason + " (m/s^2, rad/s^2)"),
-            "constrained q_ddot": Tolerance(1e-12, rel, reason + " (m/s^2, rad/s^2)"),
-            "reactions A^T lambda": Tolerance(1e-12, rel, reason + " (N, N m)"),
-            "multipliers lambda": Tolerance(
-                max(1e-12, lam_abs), rel, reason + _MULTIPLIER.format(tol=lam_abs) +
-                " (N or N m per unit of the constraint)")}
+    rel = max(1e-12, factor * cond)
+    out = {"free q_ddot": Tolerance(1e-12, rel, _SOLVE.format(cond=cond, n=n) +
+                                    " (m/s^2, rad/s^2)")}
+    if a.shape[0] == 0:
+        return out
+    cond_l = float(np.linalg.cond(reduced_matrix(m, a, ic, dc)))
+    rel_c = max(1e-12, factor * max(cond, cond_l))
+    reason = _SOLVE_CONSTRAINED.format(cond=cond, cond_l=cond_l, n=n)
+    lam_abs = rel_c * float(np.max(np.abs(reactions))) * float(
+        np.linalg.norm(np.linalg.inv(a[:, dc]).T, np.inf))
+    out.update({
+        "constrained q_ddot": Tolerance(1e-12, rel_c, reason + " (m/s^2, rad/s^2)"),
+        "reactions A^T lambda": Tolerance(1e-12, rel_c, reason + " (N, N m)"),
+        "multipliers lambda": Tolerance(max(1e-12, lam_abs), rel_c, reason +
+                                        _MULTIPLIER.format(tol=lam_abs) +
+                                        " (N or N m per unit of the constraint)")})
+    return out
 
 
 def overrides(scenario) -> dict:
@@ -420,8 +446,8 @@ def compare_state(case: ModelCase, state: State) -> list:
     m_c = system.n_constraints
     a_free = ps.to_gpme(pin.aba(pm, data, q_p, v_p, ps.to_pin(tau_pin)))
     if m_c == 0:
-        tolerances.update({**solve_tolerances(m_pin, np.zeros(len(q)), np.zeros((0, 0))),
-                           **case.overrides})
+        tolerances.update({**solve_tolerances(m_pin, np.zeros(len(q)), np.zeros((0, len(q))),
+                                              system.ic, system.dc), **case.overrides})
         add("free q_ddot", free, a_free, coords)
         return rows
     phi, phi_dot, a_pin, kappa = evaluate_reference(case.references, t, q, qd, point.__getitem__)
@@ -434,7 +460,7 @@ def compare_state(case: ModelCase, state: State) -> list:
     a_con = ps.to_gpme(pin.forwardDynamics(pm, data, q_p, v_p, ps.to_pin(tau_pin),
                                            ps.to_pin(a_pin.T).T, gamma))
     lam = np.array(data.lambda_c).copy()
-    tolerances.update({**solve_tolerances(m_pin, a_pin.T @ lam, a_pin[:, system.dc]),
+    tolerances.update({**solve_tolerances(m_pin, a_pin.T @ lam, a_pin, system.ic, system.dc),
                        **case.overrides})
     add("free q_ddot", free, a_free, coords)
     add("constrained q_ddot", sol.q_ddot, a_con, coords)
