@@ -1,4 +1,4 @@
-"""Parameter studies of the crane's programmed motion (`gpme sweep`).
+"""Parameter studies of the crane's or any model file's programmed motion (`gpme sweep`).
 
 Modules, one job each:
   spec     what to sweep: grid / list / Latin-hypercube points over CraneParameters
@@ -9,6 +9,12 @@ Modules, one job each:
   runner   runs the pending points on a Dask cluster (local by default), writes the table
   plots    heat maps over two parameters with the infeasible and the safe region marked
   command  the `gpme sweep` arguments and their translation into a spec
+With a model file (`gpme sweep --model FILE`) instead of the built-in crane:
+  model_paths    the sweepable numbers of a model file, named by dotted paths
+  model_spec     the sweep's run settings and validation for a model file
+  model_point    one point: the document with the point's values -> Scenario -> one row
+  model_metrics  the generic metrics (|Phi|, lambda, drive, reaction, q_dot, RFEM, limits,
+                 sigma_min of the constraint Jacobian) and their units
 docs/sweep.md describes the metrics and their units.  Submodules are imported on use, so
 `import gpme_study.command` (done by the command-line parser) stays light.
 """

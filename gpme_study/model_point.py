@@ -12,12 +12,14 @@ import hashlib
 import json
 import time
 import traceback
+from typing import Mapping, Optional
 
 import numpy as np
 
 from gpme_core.errors import ConstraintError, ModelError, ModelFileError, SimulationError
 
 from . import model_metrics as mm
+from .model_paths import ModelDocument
 
 # Bump when a metric's definition changes: finished points of older versions are recomputed.
 MODEL_METRICS_VERSION = 1
@@ -25,7 +27,7 @@ _STATUS_OF = ((ConstraintError, "infeasible"), (SimulationError, "diverged"),
               (ModelError, "invalid"))
 
 
-def scenario_from_document(document, point, settings):
+def scenario_from_document(document: ModelDocument, point: Mapping[str, float], settings):
     """The gpme_io.scenario.Scenario of ``document`` (a model_paths.ModelDocument) with
     ``point`` {path: value} and ``settings`` (model_spec.ModelRunSettings) written in.
 
@@ -40,7 +42,7 @@ def scenario_from_document(document, point, settings):
     return build_scenario(spec)
 
 
-def file_digests(document, data=None) -> dict:
+def file_digests(document: ModelDocument, data: Optional[Mapping] = None) -> dict:
     """{key: sha256 of the file's bytes} of the files the document names (model.urdf,
     model.side_file), so a changed URDF changes every point's key; unreadable files are
     left out (the point then fails as invalid and says why)."""
@@ -65,7 +67,7 @@ def file_digests(document, data=None) -> dict:
     return out
 
 
-def model_point_key(document, point, settings) -> str:
+def model_point_key(document: ModelDocument, point: Mapping[str, float], settings) -> str:
     """16 hex digits identifying a point's results: a hash of the document with the point's
     values written in, the files it names, the run settings and MODEL_METRICS_VERSION."""
     try:
@@ -78,7 +80,7 @@ def model_point_key(document, point, settings) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
 
-def run_model_point(document, point, settings):
+def run_model_point(document: ModelDocument, point: Mapping[str, float], settings) -> dict:
     """One row (dict) of a model-file sweep table for ``point`` {path: value}.
 
     Columns: key, status (ok, infeasible, diverged, invalid, error), error ('' if ok),
