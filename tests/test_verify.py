@@ -37,7 +37,8 @@ def test_run_directory_and_latest(report):
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]
     back = pd.read_csv(run_dir / "gpme.csv")
     assert set(back["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
-                                     "energy balance"}
+                                     "energy balance",
+                                     "smallest singular value of the constraint Jacobian"}
 
 
 def test_interrupted_run_leaves_previous_report_and_latest(report, monkeypatch):
