@@ -109,7 +109,19 @@ def column_floor(refined: "RefinedRuns", engine_df: pd.DataFrame, column: str, m
         coupled = h * float(engine_df.attrs.get("max_abs_q_ddot", 0.0))
     elif column.startswith("lambda_"):
         cond = float(engine_df.attrs.get("max_cond_M", 0.0))
-    return roundoff_floor(column_scale(engine_df, column), refined.n_steps, cond, coupled)
+    floor = roundoff_floor(column_scale(engine_df, column), refined.n_steps, cond, coupled)
+    # cross-talk: a step's update of one coordinate (velocity) is computed together with all
+    # the others (the solve with M mixes them), so it also carries round-off relative to the
+    # largest coordinate (velocity) of the state; unlike the column's own round-off above it
+    # has no systematic sign, so it accumulates as a random walk (Henrici's statistical model
+    # of round-off): 2 eps sqrt(N) max|state|.  It decides for a joint the task holds still,
+    # whose value or rate is ~0 in both engines up to round-off.
+    kind = names if column in names else [f"{c}_dot" for c in names] \
+        if column.endswith("_dot") and column[:-4] in names else None
+    if kind is not None:
+        state = float(np.abs(engine_df[kind].to_numpy(float)).max())
+        floor += 2.0 * EPS * np.sqrt(refined.n_steps) * state
+    return floor
 
 
 def observed_order(refined: RefinedRuns, columns: Sequence[str],
