@@ -53,7 +53,12 @@ def _simulate_models(args):
                                progress=not args.no_progress)
         print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
         for row in run_rows(scenario, df):
-            print(f"  {row['quantity']}: {row['abs_error']:.2e} ({'ok' if row['passed'] else 'FAIL'})")
+            if row["status"] == "info":
+                print(f"  {row['quantity']}: {row['gpme_value']:.3g} at {row['entry']} (information)")
+            else:
+                print(f"  {row['quantity']}: {row['abs_error']:.2e} at {row['entry']} "
+                      f"({'ok' if row['status'] == 'pass' else 'FAIL'}, tolerance "
+                      f"{row['tol_abs'] + row['tol_rel'] * row['scale']:.1e})")
         paths.update(write_run_outputs(scenario, df, args.out))
     return paths
 
