@@ -231,6 +231,8 @@ class ProgrammedMotion:
         self._require_partition()
         q = np.array(q, dtype=float)
         q_dot = np.array(q_dot, dtype=float)
+        if self.n_constraints == 0:
+            return q, q_dot                 # no constraints: every state is consistent
         for it in range(max_iter):
             phi, _, a, _ = self.constraints(t, q, q_dot)
             if np.max(np.abs(phi)) < tol:

@@ -220,3 +220,30 @@ def test_pinocchio_run_section_rows(exact):
     rows = pin_runs.run_section(s, quick=True)
     assert all(r["status"] == "pass" for r in rows), [(r["quantity"], r["status"]) for r in rows]
     assert rows[-1]["quantity"].startswith("forwardDynamics sign convention")
+
+
+def test_step_is_halved_until_the_run_is_in_rk4s_asymptotic_regime():
+    """A flexible arm at half its RK4 stability limit (a model file's default step) is not
+    in the asymptotic regime (observed order ~2.6 measured); refined_gpme_runs halves the
+    step until gpme's own order is within 1 of 4, so the Richardson gate means something."""
+    from gpme_io.modelfile import load_model_file
+    scenario = load_model_file(REPO / "tests" / "data" / "runs" / "flexible_free_arm.toml")
+    model, system = scenario.model, scenario.system
+    q0, qd0, dt = scenario.q0, scenario.q_dot0, scenario.dt
+    names = list(model.coordinate_names)
+    columns = names + [f"{c}_dot" for c in names]
+    once = run_gates.refined_gpme_runs(system, q0, qd0, 0.1, dt, OUTPUT_DT, max_halvings=0)
+    refined = run_gates.refined_gpme_runs(system, q0, qd0, 0.1, dt, OUTPUT_DT)
+    floors = {c: run_gates.roundoff_floor(float(np.abs(refined.coarse[c]).max()),
+                                          refined.n_steps) for c in columns}
+    p_once, _, _ = run_gates.observed_order(once, columns, floors)
+    p, _, resolved = run_gates.observed_order(refined, columns, floors)
+    assert refined.dt < once.dt
+    assert abs(p_once - 4.0) > 1.0 and resolved and abs(p - 4.0) <= 1.0, (p_once, p)
+
+
+def test_consistent_state_without_constraints_returns_the_state():
+    s = arm_scenario()
+    free = ProgrammedMotion(s.model, ())
+    q, qd = free.consistent_state(0.0, s.q0, s.q_dot0)
+    assert np.array_equal(q, s.q0) and np.array_equal(qd, s.q_dot0)

@@ -103,6 +103,7 @@ def free_section(scenario, p, log, plots):
         row = compare(ENGINE, free.name, f"{FREE}: not compared", case, [0.0], [0.0],
                       _info(f"the free motion cannot be run to {t_end:g} s: {exc}"), ["-"])
         return _tag([row], "free", "all", "not run")
+    case = f"{FREE}, drive on, {t_end:g} s, RK4 dt = {refined.dt:g} s"
     mj = runs.free_run(free, t_end, refined.dt, cases.OUTPUT_DT)
     plots[("free", free.name)] = (free.model, refined.coarse, mj)
     log(f"free {free.name}: gpme {refined.coarse.attrs['wall_time_s']:.1f} s, mujoco "
