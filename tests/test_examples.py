@@ -46,3 +46,20 @@ def test_bad_model_file_exits_2_with_the_key(tmp_path, capsys):
                      str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "missing.urdf" in err and "t_ned" in err
+
+
+def test_point_masses_export_to_mujoco_and_match_its_terms():
+    """Point masses (zero inertia) are valid when M stays positive definite; MuJoCo needs a
+    positive-definite body inertia, so the MJCF raises it by INERTIA_BOUND, which keeps the
+    term comparison at round-off."""
+    import mujoco
+
+    from crosscheck.mujoco.mjcf import INERTIA_BOUND, mjcf_text
+    from crosscheck.mujoco.terms import sample_states, term_rows
+    from gpme_io.modelfile import load_model_file
+    scenario = load_model_file(REPO / "tests" / "data" / "runs" / "point_pendulum.toml")
+    text = mjcf_text(scenario.model, 1e-3)
+    assert f"raised by {INERTIA_BOUND!r}" in text
+    mj = mujoco.MjModel.from_xml_string(text)
+    rows = term_rows(scenario.model, mj, sample_states(scenario.model, 4, 7))
+    assert all(r["status"] == "pass" for r in rows), [r for r in rows if r["status"] != "pass"]

@@ -72,6 +72,23 @@ def _pose_attributes(transform):
     return out
 
 
+# kg m^2: added to each principal moment of a body whose inertia tensor is (nearly) zero (a
+# point mass; gpme and Pinocchio accept it when the chain's mass matrix stays positive
+# definite, MuJoCo rejects a body without positive-definite inertia; its own threshold is
+# mjMINVAL = 1e-15).  Ten times that: it changes an entry of M by at most k x 1e-14 for k
+# point masses, below the 1e-13 absolute floor of the term comparison for up to 10 of them.
+INERTIA_BOUND = 1e-14
+
+
+def point_mass_bounded(inertia):
+    """(3, 3) kg m^2: ``inertia`` with INERTIA_BOUND added on the diagonal when its smallest
+    principal moment is below INERTIA_BOUND, else unchanged."""
+    inertia = np.asarray(inertia, dtype=float)
+    if np.linalg.eigvalsh(inertia).min() >= INERTIA_BOUND:
+        return inertia
+    return inertia + INERTIA_BOUND * np.eye(3)
+
+
 def body_groups(model):
     """List of joint-index lists, one per MuJoCo body (see the module docstring).
 
@@ -127,8 +144,11 @@ def _chain_xml(model, indent):
                          f'damping="{_f(j.damping)}"{rng}/>')
         ine = link.inertia
         c = ine.com_array
-        i = ine.inertia_array
+        i = point_mass_bounded(ine.inertia_array)
         full = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
+        if not np.array_equal(i, ine.inertia_array):
+            lines.append(f"{inner}<!-- point mass: inertia raised by {_f(INERTIA_BOUND)} kg m^2 "
+                         "per axis (MuJoCo needs a positive-definite body inertia) -->")
         lines.append(f'{inner}<inertial pos="{_vec(c)}" mass="{_f(ine.mass)}" '
                      f'fullinertia="{_vec(full)}"/>')
         lines.append(f'{inner}<geom type="sphere" size="{_f(VIEW_SPHERE_RADIUS)}" pos="{_vec(c)}" '
