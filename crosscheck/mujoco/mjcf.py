@@ -9,8 +9,9 @@ Mapping (docs/mjcf.md has the full table):
 * Consecutive joints whose intermediate links are massless, carry no frame and whose
   origins are the identity (the psi, theta, phi rotations of one RFEM spring-damping
   element) share one body: MuJoCo applies the joints of a body in order (z, then y, then x),
-  which is gpme's R = Rz(psi) Ry(theta) Rx(phi).  Any other massless link cannot be
-  exported (MuJoCo needs mass on every moving body) and is reported.
+  which is gpme's R = Rz(psi) Ry(theta) Rx(phi).  Any other massless link gets its own
+  body with MASS_BOUND and INERTIA_BOUND (MuJoCo needs mass on every moving body), and a
+  point mass (zero inertia tensor) its inertia raised by INERTIA_BOUND; the file says so.
 * link inertia -> <inertial pos=com mass fullinertia> in the body frame (about the com).
 * named frames -> sites; drives -> <motor> actuators (gear 1, unlimited ctrl) named
   ``drive_<joint>``: the drive function itself is applied by the caller (mjcb_control).
@@ -92,9 +93,11 @@ def point_mass_bounded(inertia):
 def body_groups(model):
     """List of joint-index lists, one per MuJoCo body (see the module docstring).
 
-    Raises ModelError listing every massless link that cannot share its joint's body."""
+    Consecutive joints share a body when the links between them are massless, carry no
+    frame and the next origin is the identity (an RFEM element's three rotations).  Any
+    other massless link gets its own body with the bounded mass of :func:`bounded_inertia`."""
     frame_links = {fr.link_index for fr in model.frames.values()}
-    groups, problems = [], []
+    groups = []
     current = []
     for k, joint in enumerate(model.joints):
         current.append(k)
@@ -105,17 +108,30 @@ def body_groups(model):
                      and np.array_equal(model.joints[k + 1].origin, np.eye(4)))
         if can_merge:
             continue
-        if massless:
-            why = ("it is the last link" if last else "it carries a frame" if k in frame_links
-                   else "the next joint's origin is not the identity")
-            problems.append(f"link {link.name!r} (after joint {joint.name!r}) is massless and "
-                            f"cannot share a body with the next joint ({why}); MuJoCo needs "
-                            "mass on every moving body")
         groups.append(current)
         current = []
-    if problems:
-        raise ModelError(problems)
     return groups
+
+
+# kg: the mass MuJoCo gets for a massless link that cannot share a body (it needs mass on
+# every moving body; its threshold is mjMINVAL = 1e-15 kg).  At the link origin it adds at
+# most 1e-14 kg x |r|^2 to M and 1e-13 N to gravity, below the term comparison's floors.
+MASS_BOUND = 1e-14
+
+
+def bounded_inertia(link):
+    """(mass kg, com (3,) m, inertia (3, 3) kg m^2, note or None) that MuJoCo gets for
+    ``link``: its own, with INERTIA_BOUND for a point mass, or MASS_BOUND and INERTIA_BOUND
+    at the link origin for a massless link."""
+    if link.inertia is None:
+        return (MASS_BOUND, np.zeros(3), INERTIA_BOUND * np.eye(3),
+                f"massless link: mass {_f(MASS_BOUND)} kg and inertia {_f(INERTIA_BOUND)} kg m^2 "
+                "per axis (MuJoCo needs mass on every moving body)")
+    i = point_mass_bounded(link.inertia.inertia_array)
+    note = None if np.array_equal(i, link.inertia.inertia_array) else (
+        f"point mass: inertia raised by {_f(INERTIA_BOUND)} kg m^2 per axis (MuJoCo needs a "
+        "positive-definite body inertia)")
+    return link.inertia.mass, link.inertia.com_array, i, note
 
 
 def _chain_xml(model, indent):
@@ -142,14 +158,11 @@ def _chain_xml(model, indent):
             lines.append(f'{inner}<joint name="{j.name}" type="{kind}" axis="{_vec(j.axis)}" '
                          f'stiffness="{_f(j.stiffness)}" springref="{_f(j.spring_reference)}" '
                          f'damping="{_f(j.damping)}"{rng}/>')
-        ine = link.inertia
-        c = ine.com_array
-        i = point_mass_bounded(ine.inertia_array)
+        mass, c, i, note = bounded_inertia(link)
         full = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
-        if not np.array_equal(i, ine.inertia_array):
-            lines.append(f"{inner}<!-- point mass: inertia raised by {_f(INERTIA_BOUND)} kg m^2 "
-                         "per axis (MuJoCo needs a positive-definite body inertia) -->")
-        lines.append(f'{inner}<inertial pos="{_vec(c)}" mass="{_f(ine.mass)}" '
+        if note:
+            lines.append(f"{inner}<!-- {note} -->")
+        lines.append(f'{inner}<inertial pos="{_vec(c)}" mass="{_f(mass)}" '
                      f'fullinertia="{_vec(full)}"/>')
         lines.append(f'{inner}<geom type="sphere" size="{_f(VIEW_SPHERE_RADIUS)}" pos="{_vec(c)}" '
                      'contype="0" conaffinity="0" group="1" rgba="0.3 0.5 0.8 1"/>')
