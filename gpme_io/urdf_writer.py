@@ -79,10 +79,24 @@ def _inertial(parent, inertia) -> None:
                   iyy=_num(i[1, 1]), iyz=_num(i[1, 2]), izz=_num(i[2, 2]))
 
 
+def link_own_frame(model: Model, name: str) -> bool:
+    """True when frame ``name`` is the frame of the link of the same name (identity
+    transform): the URDF link itself is that frame, so no fixed child link is written for it
+    (gpme_io.urdf_reader gives every chain link its frame back)."""
+    fr = model.frames[name]
+    return (model.links[fr.link_index].name == name
+            and np.array_equal(fr.transform, np.eye(4)))
+
+
+def _written_frames(model: Model) -> list:
+    return [f for f in model.frames if not link_own_frame(model, f)]
+
+
 def _name_problems(model: Model) -> list:
     problems = []
-    link_names = [ROOT_LINK] + [lk.name for lk in model.links] + list(model.frames)
-    joint_names = list(model.coordinate_names) + [f + FIXED_SUFFIX for f in model.frames]
+    frames = _written_frames(model)
+    link_names = [ROOT_LINK] + [lk.name for lk in model.links] + frames
+    joint_names = list(model.coordinate_names) + [f + FIXED_SUFFIX for f in frames]
     for kind, names in (("link", link_names), ("joint", joint_names)):
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -133,7 +147,8 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
         ET.SubElement(j, "dynamics", damping=_num(joint.damping), friction="0")
         _inertial(ET.SubElement(robot, "link", name=link.name), link.inertia)
         parent = link.name
-    for name, fr in model.frames.items():
+    for name in _written_frames(model):
+        fr = model.frames[name]
         j = ET.SubElement(robot, "joint", name=name + FIXED_SUFFIX, type="fixed")
         ET.SubElement(j, "parent", link=model.links[fr.link_index].name)
         ET.SubElement(j, "child", link=name)

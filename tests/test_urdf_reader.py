@@ -8,6 +8,7 @@ reduction of the tree) or from chains assembled by hand in the test, never from 
 """
 import math
 import sysconfig
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -461,3 +462,29 @@ def test_real_robot_matches_pinocchio_reading_the_same_file(rel, chain, frozen):
     res = load_urdf(path, side_file=None, chain=chain, frozen=frozen)
     worst = _worst_against_pinocchio(path, res, seed=sum(map(ord, rel)) % 1000)
     assert np.all(worst <= REL), dict(zip("Mgh", worst))
+
+
+def test_a_link_frame_round_trips_through_the_urdf_writer():
+    """A frame that is a chain link's own frame (a model file's constraint on a moving link)
+    is written as that URDF link, not as a second link of the same name, and comes back with
+    with_link_frames."""
+    from gpme_core.model import REVOLUTE, ChainBuilder
+    from gpme_core.inertia import cuboid
+    from gpme_io.urdf_reader import read_urdf, with_link_frames
+    from gpme_io.urdf_writer import link_own_frame, urdf_documents
+    b = ChainBuilder("two")
+    b.add_joint("j1", REVOLUTE, (0, 0, 1), link="l1")
+    b.add_body(cuboid(1.0, (0.1, 0.1, 0.3), com=(0, 0, 0.15)))
+    b.add_frame("l1")                                   # the link's own frame
+    b.add_joint("j2", REVOLUTE, (0, 1, 0), link="l2")
+    b.add_body(cuboid(1.0, (0.3, 0.1, 0.1), com=(0.15, 0, 0)))
+    model = b.build()
+    assert link_own_frame(model, "l1")
+    text, _ = urdf_documents(model)
+    assert text.count('<link name="l1"') == 1
+    path = Path(tempfile.mkdtemp()) / "two.urdf"
+    path.write_text(text)
+    back = with_link_frames(read_urdf(path, side_file=None), ["l1"])
+    assert back.frame("l1").link_index == 0
+    with pytest.raises(ModelError, match="no links named"):
+        with_link_frames(back, ["nowhere"])

@@ -53,6 +53,8 @@ from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 from gpme_core.model import Model
 from gpme_io.urdf import read_urdf, write_urdf
+from gpme_io.urdf_reader import with_link_frames
+from gpme_io.urdf_writer import link_own_frame
 
 from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
@@ -329,7 +331,9 @@ def urdf_case(scenario, urdf_dir: Path) -> ModelCase:
     path = Path(urdf_dir) / f"{scenario.name}.urdf"
     try:
         write_urdf(original.model, path)
-        model = read_urdf(path)
+        # frames that are a link's own frame are the URDF link itself (gpme_io.urdf_writer)
+        model = with_link_frames(read_urdf(path), [f for f in original.model.frames
+                                                   if link_own_frame(original.model, f)])
     except Exception as exc:
         raise type(exc)(f"scenario {scenario.name!r}: URDF round trip: {exc}") from exc
     system = ProgrammedMotion(model, original.constraint_specs, dependent=original.dependent,
