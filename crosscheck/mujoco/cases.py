@@ -53,8 +53,11 @@ class Plan:
     term_states: int
 
     def t_end(self, scenario) -> float:
-        """s, run length for ``scenario``: its full length, or min(quick_t_end, QUICK_T_END)."""
-        return min(scenario.quick_t_end, QUICK_T_END) if self.quick else scenario.t_end
+        """s, run length for ``scenario``: min(t_end, run_gates.FULL_RUN_T_END), or
+        min(quick_t_end, QUICK_T_END)."""
+        from ..run_gates import FULL_RUN_T_END
+        return min(scenario.quick_t_end, QUICK_T_END) if self.quick else \
+            min(scenario.t_end, FULL_RUN_T_END)
 
 
 def plan(quick: bool) -> Plan:

@@ -200,8 +200,9 @@ def kkt_residual(scenario, t: float, q, q_dot, pin_system=None):
 
 def run_t_end(scenario, quick: bool) -> float:
     """s, run length of the section: the scenario's quick length capped at QUICK_T_END for
-    CI, else its full length."""
-    return min(scenario.quick_t_end, QUICK_T_END) if quick else scenario.t_end
+    CI, else its full length capped at run_gates.FULL_RUN_T_END."""
+    return min(scenario.quick_t_end, QUICK_T_END) if quick else \
+        min(scenario.t_end, run_gates.FULL_RUN_T_END)
 
 
 def run_step(scenario) -> float:
