@@ -146,12 +146,18 @@ def test_richardson_estimate_is_gpmes_actual_error():
 def test_order_row_fails_outside_the_asymptotic_regime():
     """The arm at dt = 0.125 s, 2 s: Baumgarte's double eigenvalue -20 1/s puts h lambda =
     -2.5 near RK4's stability limit (-2.79), far from its asymptotic regime (measured
-    p = 6.8 at dt = 0.125 s, 4.1 at 0.1 s): the order row fails."""
+    p = 6.8 at dt = 0.125 s, 4.1 at 0.1 s): without step halving the order row fails; with
+    it (the default) the step is halved into the asymptotic regime and the row passes."""
     s = arm_scenario(dt=0.125)
-    refined = run_gates.refined_gpme_runs(s.system, s.q0, s.q_dot0, 2.0, s.dt, 0.125)
+    refined = run_gates.refined_gpme_runs(s.system, s.q0, s.q_dot0, 2.0, s.dt, 0.125,
+                                          max_halvings=0)
     df = mj_runs.programmed_run(s, 2.0, refined.dt, 0.125)
     row = _rows("mujoco", s, refined, df)[-1]
     assert row["status"] == "fail" and "meaningless" in row["reason"]
+    halved = run_gates.refined_gpme_runs(s.system, s.q0, s.q_dot0, 2.0, s.dt, 0.125)
+    assert halved.dt < refined.dt
+    df = mj_runs.programmed_run(s, 2.0, halved.dt, 0.125)
+    assert _rows("mujoco", s, halved, df)[-1]["status"] == "pass"
 
 
 def _heavier(model, link, factor=1.01):
@@ -247,3 +253,13 @@ def test_consistent_state_without_constraints_returns_the_state():
     free = ProgrammedMotion(s.model, ())
     q, qd = free.consistent_state(0.0, s.q0, s.q_dot0)
     assert np.array_equal(q, s.q0) and np.array_equal(qd, s.q_dot0)
+
+
+def test_a_run_beyond_the_step_budget_is_reported_not_run():
+    """The crane at n_rfe = 10 needs dt ~4e-6 s for RK4 (Kelvin-Voigt torsion modes): 2 s is
+    ~5e5 steps, above run_gates.MAX_RUN_STEPS; the section says so in an information row."""
+    s = crane_scenario(10)
+    assert s.dt < 1e-5
+    rows = pin_runs.run_section(s, quick=False)
+    assert len(rows) == 1 and rows[0]["status"] == "info"
+    assert "above the budget" in rows[0]["reason"]

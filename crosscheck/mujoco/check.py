@@ -247,6 +247,12 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
     plots, rows, tables = {}, [], []
     for s in scenarios:
         rows += terms_section(s, p, log)
+        skip = run_gates.over_budget(p.t_end(s), _dt(s))
+        if skip:
+            log(f"runs {s.name}: {skip}")
+            rows += _tag([compare(ENGINE, s.name, "runs: not run", f"{p.t_end(s):g} s", [0.0],
+                                  [0.0], _info(skip), ["-"])], "exact", "all", "not run")
+            continue
         rows += free_section(s, p, log, plots)
         exact_rows, refined, start_state = exact_section(s, p, log, plots)
         rows += exact_rows

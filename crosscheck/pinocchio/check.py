@@ -47,7 +47,7 @@ import pandas as pd
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from gpme_core.errors import ConstraintError, SimulationError
+from gpme_core.errors import ConstraintError, GpmeError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
@@ -554,7 +554,12 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
                          int((~df["passed"]).sum()))
         if "runs" in sections:
             from .runs import run_section
-            rows = run_section(scenario, quick, log.info)
+            try:
+                rows = run_section(scenario, quick, log.info)
+            except GpmeError as exc:     # a run that cannot be made is a failed check
+                rows = [compare(ENGINE, scenario.name, "exact programmed run: failed",
+                                "run", [np.nan], [0.0], Tolerance(0.0, 0.0, f"the run failed: "
+                                f"{exc}"[:500]), ["-"])]
             frames.append(pd.DataFrame(rows).assign(
                 section=[r.get("section", "runs") for r in rows]))
         if bar:

@@ -226,6 +226,12 @@ def run_section(scenario, quick: bool, log=None, refined=None, pin_system=None) 
     start.  refined: gpme's RefinedRuns when already computed (same t_end, dt, output_dt)."""
     log = log or (lambda msg: None)
     t_end, dt = run_t_end(scenario, quick), run_step(scenario)
+    skip = run_gates.over_budget(t_end, dt) if refined is None else None
+    if skip:
+        log(f"{EXACT} {scenario.name}: {skip}")
+        return [compare(ENGINE, scenario.name, f"{EXACT}: not run", f"{t_end:g} s, RK4 dt = "
+                        f"{dt:.3g} s", [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {skip}"),
+                        ["-"])]
     if refined is None:
         refined = run_gates.refined_gpme_runs(scenario.system, scenario.q0, scenario.q_dot0,
                                               t_end, dt, OUTPUT_DT)
