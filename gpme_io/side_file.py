@@ -38,16 +38,6 @@ def side_file_path(urdf_path) -> Path:
     return p.with_name(p.stem + SIDE_SUFFIX)
 
 
-def drive_record(drive) -> Optional[dict]:
-    """{"joint", "function", "parameters"} of a drive whose function is a dataclass of
-    gpme_core.time_functions, else None (it cannot be stored)."""
-    fn = drive.function
-    if dataclasses.is_dataclass(fn) and getattr(time_functions, type(fn).__name__, None) is type(fn):
-        return {"joint": drive.joint, "function": type(fn).__name__,
-                "parameters": dataclasses.asdict(fn)}
-    return None
-
-
 def side_document(model: Model, drives: list) -> dict:
     """The side-file dict of ``model`` with the given drive records (see drive_record)."""
     return {
@@ -132,6 +122,13 @@ def side_file_problems(side: Any, label: str = "side file") -> list:
             problems.append(f"{label}: flexible link record {rec!r} must have name, n_segments "
                             f"(int >= 0), joints, links and beam with fields {sorted(beam_fields)}")
     for rec in side.get("drives", []) if isinstance(side.get("drives"), list) else []:
+        if isinstance(rec, dict) and rec.get("function") == EXPRESSION_DRIVE:
+            from gpme_io.modelfile.expressions import parse_expression
+            params = rec.get("parameters")
+            text = params.get("expr") if isinstance(params, dict) else None
+            _, bad = parse_expression(text, {"t": "s"})
+            problems += [f"{label}: drive record on {rec.get('joint')!r}: expr {p}" for p in bad]
+            continue
         cls = getattr(time_functions, str(rec.get("function")) if isinstance(rec, dict) else "",
                       None)
         if not (isinstance(rec, dict) and isinstance(cls, type) and dataclasses.is_dataclass(cls)
@@ -140,3 +137,32 @@ def side_file_problems(side: Any, label: str = "side file") -> list:
             problems.append(f"{label}: drive record {rec!r} must name a dataclass of "
                             "gpme_core.time_functions in 'function' with its 'parameters'")
     return problems
+
+
+# a drive given as a SymPy expression in t: stored as its text, read back without eval
+EXPRESSION_DRIVE = "SympyTimeFunction"
+
+
+def drive_record(drive) -> Optional[dict]:
+    """{"joint", "function", "parameters"} of a drive (None when its function cannot be
+    stored): a dataclass of gpme_core.time_functions by its fields, a SympyTimeFunction by
+    its expression text."""
+    joint, function = drive.joint, drive.function
+    if isinstance(function, time_functions.SympyTimeFunction):
+        return {"joint": joint, "function": EXPRESSION_DRIVE,
+                "parameters": {"expr": str(function.expr)}}
+    if dataclasses.is_dataclass(function) and \
+            getattr(time_functions, type(function).__name__, None) is type(function):
+        return {"joint": joint, "function": type(function).__name__,
+                "parameters": dataclasses.asdict(function)}
+    return None
+
+
+def drive_function(rec: dict):
+    """The time function of a validated side-file drive record (expressions parsed by
+    gpme_io.modelfile.expressions, never evaluated as Python)."""
+    if rec["function"] == EXPRESSION_DRIVE:
+        from gpme_io.modelfile.expressions import parse_expression
+        expr, _ = parse_expression(rec["parameters"]["expr"], {"t": "s"})
+        return time_functions.SympyTimeFunction(expr)
+    return getattr(time_functions, rec["function"])(**rec["parameters"])

@@ -48,7 +48,7 @@ from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
                              FlexibleLinkInfo, Model, validate_model)
 from gpme_core.rfem import BeamProperties, BeamSection
 
-from .side_file import read_side_file, side_file_path, side_file_problems
+from .side_file import drive_function, read_side_file, side_file_path, side_file_problems
 from .urdf_writer import UNLIMITED
 
 _MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
@@ -902,8 +902,7 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
                 builder.add_frame(x, after @ pose[x])
                 frames.append(x)
         for rec in side.get("drives", []):
-            builder.add_drive(rec["joint"], getattr(time_functions, rec["function"])(
-                **rec["parameters"]))
+            builder.add_drive(rec["joint"], drive_function(rec))
         model = builder.build()
         model = _with_flexible_records(model, side_flex, flexible)
     except ModelError as exc:

@@ -119,8 +119,9 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
         for d in model.drives:
             rec = drive_record(d)
             if rec is None:
-                problems.append(f"drive on {d.joint!r}: {d.function!r} is not a dataclass of "
-                                "gpme_core.time_functions and cannot be stored; write with "
+                problems.append(f"drive on {d.joint!r}: {d.function!r} is neither a dataclass of "
+                                "gpme_core.time_functions nor a SympyTimeFunction and cannot be "
+                                "stored; write with "
                                 "include_drives=False and add the drive after reading")
             drives.append(rec)
     if problems:

@@ -488,3 +488,27 @@ def test_a_link_frame_round_trips_through_the_urdf_writer():
     assert back.frame("l1").link_index == 0
     with pytest.raises(ModelError, match="no links named"):
         with_link_frames(back, ["nowhere"])
+
+
+def test_expression_drive_round_trips_and_a_bad_expression_is_refused(tmp_path):
+    """A drive written as a SymPy expression (a model file's `type = "expression"`) is
+    stored as its text and read back without eval; code in that text is refused."""
+    import json
+
+    from gpme_core.inertia import cuboid
+    from gpme_core.model import REVOLUTE, ChainBuilder
+    from gpme_core.time_functions import SympyTimeFunction
+    from gpme_io.urdf_reader import read_urdf
+    from gpme_io.urdf_writer import write_urdf
+    b = ChainBuilder("driven")
+    b.add_joint("j1", REVOLUTE, (0, 0, 1), link="l1")
+    b.add_body(cuboid(1.0, (0.3, 0.1, 0.1), com=(0.15, 0, 0)))
+    b.add_drive("j1", SympyTimeFunction("0.3*sin(4*t)"))
+    path, side = write_urdf(b.build(), tmp_path / "driven.urdf")
+    back = read_urdf(path)
+    assert back.drive_forces(0.2) == pytest.approx([0.3 * math.sin(0.8)], rel=1e-15)
+    data = json.loads(side.read_text())
+    data["drives"][0]["parameters"]["expr"] = "__import__('os').system('true')"
+    side.write_text(json.dumps(data))
+    with pytest.raises(ModelFileError, match="drive record on 'j1'"):
+        read_urdf(path)
