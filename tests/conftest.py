@@ -1,4 +1,6 @@
 """Shared fixtures: small models built from the public API."""
+import zlib
+
 import numpy as np
 import pytest
 
@@ -8,9 +10,11 @@ from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
 
 
-@pytest.fixture(scope="session")
-def rng():
-    return np.random.default_rng(20261122)
+@pytest.fixture
+def rng(request):
+    """A generator of the test's own: seeded from the test's name, so its draws do not
+    depend on which tests ran before it (a session-wide generator did)."""
+    return np.random.default_rng([20261122, zlib.crc32(request.node.name.encode())])
 
 
 def spatial_arm():
