@@ -17,6 +17,22 @@ def _error(msg):
     return EXIT_USAGE
 
 
+def output_dir_problem(path, flag="--out"):
+    """Why ``path`` cannot be the output directory (None when it can): made (if missing) and
+    written to before any work, so a long run never ends in an unwritable place."""
+    import tempfile
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        return f"{flag} {str(p)!r} exists and is not a directory; give a directory"
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=p):
+            pass
+    except OSError as exc:
+        return f"{flag} {str(p)!r} cannot be created or written ({exc.strerror or exc})"
+    return None
+
+
 def load_scenarios(paths):
     """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each)."""
     from gpme_io.modelfile import load_model_file
@@ -65,6 +81,8 @@ def _simulate_models(args):
 
 def _simulate(args):
     from gpme_core.errors import GpmeError
+    if output_dir_problem(args.out):
+        return _error(output_dir_problem(args.out))
     if args.dt is not None and not args.dt > 0:
         return _error(f"--dt must be a positive step in s, got {args.dt!r}")
     if args.dt is not None and args.method not in (None, "RK4"):
@@ -84,6 +102,8 @@ def _simulate(args):
 
 def _crosscheck(args):
     from gpme_core.errors import GpmeError
+    if args.out and output_dir_problem(args.out):
+        return _error(output_dir_problem(args.out))
     from crosscheck.verify import default_scenarios
     try:
         scenarios = load_scenarios(args.model) if args.model else default_scenarios(
@@ -105,6 +125,8 @@ def _crosscheck(args):
 
 
 def _verify(args):
+    if output_dir_problem(args.out):
+        return _error(output_dir_problem(args.out))
     from crosscheck import verify
     return verify.main(args)
 

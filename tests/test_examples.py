@@ -63,3 +63,13 @@ def test_point_masses_export_to_mujoco_and_match_its_terms():
     mj = mujoco.MjModel.from_xml_string(text)
     rows = term_rows(scenario.model, mj, sample_states(scenario.model, 4, 7))
     assert all(r["status"] == "pass" for r in rows), [r for r in rows if r["status"] != "pass"]
+
+
+@pytest.mark.parametrize("command", [["simulate"], ["verify"], ["crosscheck", "mujoco"]],
+                         ids=["simulate", "verify", "crosscheck"])
+def test_unusable_output_directory_is_refused_before_any_work(tmp_path, capsys, command):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for out, why in ((a_file, "is not a directory"), (a_file / "sub", "cannot be created")):
+        assert cli.main(command + ["--out", str(out), "--model", str(EXAMPLE)]) == 2
+        assert why in capsys.readouterr().err
