@@ -11,20 +11,18 @@ or diverges (``diverged``) is a recorded row, never a crash; anything else is ``
 import hashlib
 import json
 import time
-import traceback
 from typing import Mapping, Optional
 
 import numpy as np
 
-from gpme_core.errors import ConstraintError, ModelError, ModelFileError, SimulationError
+from gpme_core.errors import ModelError, ModelFileError
 
 from . import model_metrics as mm
 from .model_paths import ModelDocument
+from .point import record_failure
 
 # Bump when a metric's definition changes: finished points of older versions are recomputed.
 MODEL_METRICS_VERSION = 1
-_STATUS_OF = ((ConstraintError, "infeasible"), (SimulationError, "diverged"),
-              (ModelError, "invalid"))
 
 
 def scenario_from_document(document: ModelDocument, point: Mapping[str, float], settings):
@@ -110,11 +108,6 @@ def run_model_point(document: ModelDocument, point: Mapping[str, float], setting
                            f"({row['transient_s']:.3g} s): |Phi| not checked; start on the "
                            "constraints (run.on_constraints = true) or run longer")
     except Exception as exc:    # every failure becomes a row: the sweep goes on
-        row["status"] = next((s for cls, s in _STATUS_OF if isinstance(exc, cls)), "error")
-        row["failed_run"] = stage
-        row["error"] = f"{type(exc).__name__}: {exc}"
-        if row["status"] == "error":   # a bug, not a property of the point: keep where
-            row["error"] += " | " + " <- ".join(
-                f"{fr.name}:{fr.lineno}" for fr in traceback.extract_tb(exc.__traceback__)[-3:])
+        record_failure(row, exc, stage)
     row["wall_time_s"] = time.perf_counter() - start
     return row

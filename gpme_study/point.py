@@ -33,6 +33,18 @@ _STATUS_OF = ((ConstraintError, "infeasible"), (SimulationError, "diverged"),
               (ModelError, "invalid"))
 
 
+def record_failure(row, exc, stage):
+    """Put a failed point's outcome into ``row``: status (infeasible / diverged / invalid /
+    error), the stage that failed, the message, and for an unexpected error (a bug, not a
+    property of the point) where it was raised."""
+    row["status"] = next((s for cls, s in _STATUS_OF if isinstance(exc, cls)), "error")
+    row["failed_run"] = stage
+    row["error"] = f"{type(exc).__name__}: {exc}"
+    if row["status"] == "error":
+        row["error"] += " | " + " <- ".join(
+            f"{fr.name}:{fr.lineno}" for fr in traceback.extract_tb(exc.__traceback__)[-3:])
+
+
 def resolved_parameters(point):
     """CraneParameters of a point (raises ModelError for unknown fields)."""
     try:
@@ -110,12 +122,7 @@ def run_point(point, settings=RunSettings()):
         row["constraints_met"] = bool(
             max(row["phi1_max_abs"], row["phi2_max_abs_m"]) <= settings.phi_tolerance)
     except Exception as exc:    # every failure becomes a row: the sweep goes on
-        row["status"] = next((s for cls, s in _STATUS_OF if isinstance(exc, cls)), "error")
-        row["failed_run"] = stage
-        row["error"] = f"{type(exc).__name__}: {exc}"
-        if row["status"] == "error":   # a bug, not a property of the point: keep where
-            row["error"] += " | " + " <- ".join(
-                f"{fr.name}:{fr.lineno}" for fr in traceback.extract_tb(exc.__traceback__)[-3:])
+        record_failure(row, exc, stage)
     row["wall_time_s"] = time.perf_counter() - start
     return row
 
