@@ -26,8 +26,7 @@ OPEN_PRISMATIC = 0.2      # m around q0 where a prismatic joint has no (finite) 
 
 def flexible_coordinates(model) -> tuple:
     """Names of the RFEM coordinates of ``model`` (every sde's psi, theta, phi), in model order."""
-    idx = sorted(k for f in model.flexible_links for k in f.joint_indices)
-    return tuple(model.coordinate_names[k] for k in idx)
+    return model.flexible_coordinates
 
 
 def state_ranges(model, flexible: Optional[Sequence[str]] = None,

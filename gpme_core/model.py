@@ -148,6 +148,12 @@ class Model:
             raise ModelError(f"no frame named {name!r}; the model has {sorted(self.frames)}") from None
 
     @property
+    def flexible_coordinates(self):
+        """Names of the RFEM coordinates (psi, theta, phi of every sde), in model order."""
+        idx = sorted(k for f in self.flexible_links for k in f.joint_indices)
+        return tuple(self.coordinate_names[k] for k in idx)
+
+    @property
     def total_mass(self):
         """kg."""
         return float(self.pseudo_inertias[:, 3, 3].sum())

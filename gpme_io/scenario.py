@@ -96,8 +96,7 @@ class Scenario:
     @property
     def flexible_coordinates(self):
         """Names of the RFEM coordinates (psi, theta, phi of every sde), in model order."""
-        idx = sorted(k for f in self.model.flexible_links for k in f.joint_indices)
-        return tuple(self.model.coordinate_names[k] for k in idx)
+        return self.model.flexible_coordinates
 
     def t_run(self, quick):
         """s, run length for a full or a quick (CI) run."""
