@@ -99,8 +99,8 @@ def _crash_row(step, exc):
 
 
 def _claim_run_dir(root, run_id):
-    """(staging dir, final name): a fresh hidden staging directory and a run name no other
-    run (even one started in the same second) has taken."""
+    """A fresh hidden staging directory root/.<run_id>.*.partial (mkdtemp: unique even for
+    runs started in the same second); _publish picks the final name."""
     root.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=".partial", dir=root))
     return staging
