@@ -4,10 +4,38 @@ import zlib
 import numpy as np
 import pytest
 
+from gpme_core import fast
 from gpme_core import transforms as tf
 from gpme_examples.crane import build_crane
 from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
+
+
+COMPUTATION_PATHS = ("compiled", "numpy")
+
+
+def pytest_generate_tests(metafunc):
+    """Tests marked ``both_computation_paths`` run once per path of gpme_core: the numba
+    kernels (gpme_core.fast) and the readable numpy reference they replace, so that CI
+    exercises both (a fault in either fails a test)."""
+    if metafunc.definition.get_closest_marker("both_computation_paths"):
+        metafunc.parametrize("computation_path", COMPUTATION_PATHS, indirect=True)
+
+
+@pytest.fixture(autouse=True)
+def computation_path(request, monkeypatch):
+    """The path gpme_core computes with in this test: "compiled" or "numpy".
+
+    Unparametrised tests use whatever the environment gives (numba unless GPME_NO_JIT=1).
+    The dispatch sites read ``fast.ENABLED`` at call time, so patching it switches path."""
+    path = getattr(request, "param", None)
+    if path is None:
+        return "compiled" if fast.ENABLED else "numpy"
+    if path == "compiled" and not fast.ENABLED:
+        pytest.skip("GPME_NO_JIT=1 or numba missing: the compiled path is not available")
+    if path == "numpy":
+        monkeypatch.setattr(fast, "ENABLED", False)
+    return path
 
 
 @pytest.fixture

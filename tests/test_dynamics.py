@@ -4,6 +4,9 @@ import numpy as np
 
 from gpme_core import dynamics as dy
 from gpme_core.kinematics import chain_kinematics
+import pytest
+
+pytestmark = pytest.mark.both_computation_paths
 
 H = 1e-6  # central-difference step; errors ~ h^2 * 3rd derivative ~ 1e-12 plus eps/h ~ 1e-10
 

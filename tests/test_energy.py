@@ -7,6 +7,8 @@ from gpme_examples.crane import CraneParameters, build_crane, crane_system, init
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 
+pytestmark = pytest.mark.both_computation_paths
+
 # no dampers, no drive; free motion (no stroke limits: nothing programmes the slider)
 CONSERVATIVE = CraneParameters(support_damping=0.0, arm_viscosity=0.0, drive_torque=0.0,
                                slider_stroke=(-np.inf, np.inf), arm_pitch_range=(-np.inf, np.inf))

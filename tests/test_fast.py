@@ -25,3 +25,56 @@ def test_kernels_equal_reference_to_round_off(n_rfe, arm, rng):
                               (h, dy.velocity_product_terms(model, q, qd)),
                               (g, dy.gravity_forces(model, q))):
             np.testing.assert_allclose(fast_val, ref, rtol=0, atol=1e-13 * max(1, np.abs(ref).max()))
+
+
+def _with_path(monkeypatch, enabled, compute):
+    """compute() with gpme_core's dispatch set to the compiled (True) or numpy (False) path."""
+    monkeypatch.setattr(fast, "ENABLED", enabled)
+    try:
+        return compute()
+    finally:
+        monkeypatch.undo()
+
+
+@pytest.mark.parametrize("n_rfe", [0, 3])
+def test_point_kinematics_compiled_equals_numpy(n_rfe, arm, rng, monkeypatch):
+    """fast.point against the numpy route of kinematics.point_kinematics (position, velocity,
+    Jacobian C, drift d of a point off the link origin) at random states, on every link."""
+    from gpme_core.kinematics import point_kinematics
+    for model in (build_crane(n_rfe), arm):
+        n = model.n_coordinates
+        q, qd = rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
+        kin = chain_kinematics(model, q)
+        r_local = rng.uniform(-0.5, 0.5, 3)
+        for link in range(n):
+            compiled = _with_path(monkeypatch, True,
+                                  lambda: point_kinematics(model, kin, qd, link, r_local))
+            reference = _with_path(monkeypatch, False,
+                                   lambda: point_kinematics(model, kin, qd, link, r_local))
+            for name in ("position", "velocity", "jacobian", "drift"):
+                a, b = getattr(compiled, name), getattr(reference, name)
+                # sums over <= n 4x4 products of O(1) entries: round-off ~ n eps |b|
+                np.testing.assert_allclose(a, b, rtol=0, atol=1e-13 * max(1.0, np.abs(b).max()),
+                                           err_msg=f"{model.name} link {link} {name}")
+
+
+@pytest.mark.parametrize("n_rfe", [0, 3])
+def test_reduced_solve_compiled_equals_numpy(n_rfe, rng, monkeypatch):
+    """fast.reduced_solve against the numpy reduced form (N^T M q_ddot = N^T rhs with the
+    constraint rows): accelerations and multipliers at random states near the crane's
+    manifold (Baumgarte terms active, so the whole right-hand side is exercised)."""
+    from gpme_examples.crane import crane_system, initial_state
+    system = crane_system(n_rfe)
+    q0, _ = initial_state(system.model)
+    n = system.model.n_coordinates
+    for _ in range(3):
+        q = q0 + rng.normal(0.0, 0.05, n)
+        qd = rng.normal(0.0, 0.5, n)
+        compiled = _with_path(monkeypatch, True, lambda: system.solve(0.3, q, qd))
+        reference = _with_path(monkeypatch, False, lambda: system.solve(0.3, q, qd))
+        # a linear solve of condition number ~cond(M) * cond(A_dc): allow 1e-10 relative
+        # (cond(M) of the crane with the RFEM arm ~1e5, eps ~ 2e-16 -> ~1e-11)
+        for name in ("q_ddot", "multipliers"):
+            a, b = getattr(compiled, name), getattr(reference, name)
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * max(1.0, np.abs(b).max()),
+                                       err_msg=name)

@@ -13,6 +13,8 @@ from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.time_functions import Cosine, SympyTimeFunction
 
+pytestmark = pytest.mark.both_computation_paths
+
 
 @pytest.mark.parametrize("n_rfe", [0, 3])
 def test_reduced_form_equals_lagrange_multiplier_form(n_rfe, rng):

@@ -7,6 +7,8 @@ from gpme.cli import main
 from gpme_examples.crane import crane_system, initial_state
 from gpme_core.integrate import simulate
 
+pytestmark = pytest.mark.both_computation_paths
+
 
 @pytest.fixture(scope="module")
 def reference():

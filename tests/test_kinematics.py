@@ -5,6 +5,8 @@ import pytest
 from gpme_core.kinematics import (chain_kinematics, link_transforms, point_kinematics,
                                   velocity_product_accelerations)
 
+pytestmark = pytest.mark.both_computation_paths
+
 # Central differences with step h have truncation error ~ h^2 |T'''| / 6 ~ 1e-9 at h = 1e-5
 # and round-off ~ eps / h ~ 1e-11; 1e-7 leaves a factor ~100 margin on both.
 FD_STEP = 1e-5

@@ -11,6 +11,8 @@ from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, ChainBuilder
 from gpme_core.rfem import BeamProperties
 
+pytestmark = pytest.mark.both_computation_paths
+
 BETA_L = np.array([1.87510407, 4.69409113, 7.85475744])
 # slender (L/d = 500) so that rotary inertia, which RFEM includes and Euler-Bernoulli
 # neglects, shifts the frequencies by < 1e-5 and the discretisation error dominates

@@ -9,6 +9,8 @@ from gpme_core.errors import ConstraintError
 from gpme_core.kinematics import link_transforms
 from gpme_core.statics import static_equilibrium
 
+pytestmark = pytest.mark.both_computation_paths
+
 
 def test_static_arm_balances_gravity_with_the_sde_springs():
     model = build_crane(5)

@@ -10,6 +10,8 @@ from gpme_core.inertia import RigidBodyInertia, check_pseudo_inertia, cuboid
 from gpme_core.integrate import simulate
 from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
 
+pytestmark = pytest.mark.both_computation_paths
+
 
 def test_negative_mass():
     b = ChainBuilder()
