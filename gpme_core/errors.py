@@ -37,3 +37,8 @@ class ConstraintError(GpmeError):
 
 class SimulationError(GpmeError):
     """A run diverged or produced non-finite values."""
+
+
+class SectionWarning(UserWarning):
+    """A beam's section constants are legal but suspicious (e.g. a circle's torsion constant
+    J = I_y + I_z on a section with I_y != I_z); the message gives the values."""

@@ -77,7 +77,7 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
     from gpme_io.side_file import side_file_path
     from gpme_io.urdf_reader import FlexibleLink, load_urdf
     shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
-              "rectangle": BeamSection.rectangle}
+              "rectangle": BeamSection.rectangle, "hollow_rectangle": BeamSection.hollow_rectangle}
     problems = []
     flexible = {}
     for f in spec.flexible:

@@ -18,7 +18,8 @@ from gpme_io.scenario import ToleranceOverride
 
 BUILTIN_MODELS = ("crane",)
 SECTION_SHAPES = {"circle": ("diameter",), "tube": ("outer_diameter", "wall_thickness"),
-                  "rectangle": ("width_y", "height_z")}
+                  "rectangle": ("width_y", "height_z"),
+                  "hollow_rectangle": ("width_y", "height_z", "wall_thickness")}
 CONSTRAINT_KINDS = ("expression", "ellipse", "coordinate")
 AXES = {"x": 0, "y": 1, "z": 2}
 # units of the symbols of each kind of expression
