@@ -15,7 +15,8 @@ A model is built once by :class:`ChainBuilder`, validated once (every problem in
 :class:`ModelError`), and immutable.  The state (t, q, q_dot) is passed in and out as
 arrays ordered as ``model.coordinate_names``.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Callable, Optional
 
 import numpy as np
@@ -28,6 +29,13 @@ REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
 JOINT_KINDS = (REVOLUTE, PRISMATIC)
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def frozen_array(values, dtype=float):
+    """A read-only copy of ``values`` as a numpy array (the caller's array stays writable)."""
+    arr = np.array(values, dtype=dtype, copy=True)
+    arr.setflags(write=False)
+    return arr
 
 
 @dataclass(frozen=True)
@@ -57,6 +65,12 @@ class Joint:
     link: str = ""
     limits: tuple = (-np.inf, np.inf)
 
+    def __post_init__(self):
+        # a read-only copy: the caller's array can change afterwards without moving the joint
+        object.__setattr__(self, "origin", frozen_array(self.origin))
+        object.__setattr__(self, "axis", tuple(float(a) for a in np.ravel(self.axis)))
+        object.__setattr__(self, "limits", tuple(float(v) for v in np.ravel(self.limits)))
+
 
 @dataclass(frozen=True)
 class Link:
@@ -73,6 +87,9 @@ class Frame:
     name: str
     link_index: int
     transform: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "transform", frozen_array(self.transform))
 
 
 @dataclass(frozen=True)
@@ -93,43 +110,74 @@ class FlexibleLinkInfo:
     joint_indices: tuple
     link_indices: tuple
 
+    def __post_init__(self):
+        object.__setattr__(self, "joint_indices", tuple(int(k) for k in self.joint_indices))
+        object.__setattr__(self, "link_indices", tuple(int(k) for k in self.link_indices))
+
 
 class Model:
-    """Immutable, validated serial-chain model.  Build it with :class:`ChainBuilder`."""
+    """Immutable, validated serial-chain model.  Build it with :class:`ChainBuilder`.
+
+    Immutable means: every array attribute is a read-only copy (writing into it raises
+    ValueError), ``frames`` is a read-only mapping (types.MappingProxyType), the sequences
+    are tuples of frozen dataclasses, and assigning or deleting an attribute raises
+    AttributeError.  Use :meth:`with_changes` (or a new builder) for a changed model.
+
+    Array attributes (n coordinates): origins (n, 4, 4); axes (n, 3); is_revolute (n,)
+    bool; generators (n, 4, 4); pseudo_inertias (n, 4, 4) kg, kg m, kg m^2 in each link
+    frame; gravity (3,) m/s^2 and gamma (4,) = (gravity, 0); stiffness, spring_reference,
+    damping, lower_limits, upper_limits (n,) in the coordinates' SI units.
+    """
 
     def __init__(self, joints, links, frames, drives, gravity, flexible_links, name):
-        self.name = name
-        self.joints = tuple(joints)
-        self.links = tuple(links)
-        self.frames = dict(frames)
-        self.drives = tuple(drives)
-        self.gravity = np.array(gravity, dtype=float)
+        put = self._init_attr
+        put("name", name)
+        put("joints", tuple(joints))
+        put("links", tuple(links))
+        put("frames", MappingProxyType(dict(frames)))
+        put("drives", tuple(drives))
+        gravity = np.array(gravity, dtype=float)
+        put("gravity", frozen_array(gravity))
         # (4,) homogeneous gravity (g_x, g_y, g_z, 0) used by the trace-form gravity terms
-        self.gamma = np.append(self.gravity, 0.0) if self.gravity.shape == (3,) else np.zeros(4)
-        self.flexible_links = tuple(flexible_links)
+        put("gamma", frozen_array(np.append(gravity, 0.0) if gravity.shape == (3,)
+                                  else np.zeros(4)))
+        put("flexible_links", tuple(flexible_links))
         n = len(self.joints)
-        self.n_coordinates = n
-        self.coordinate_names = tuple(j.name for j in self.joints)
-        self._index = {name: k for k, name in enumerate(self.coordinate_names)}
-        self.origins = np.array([j.origin for j in self.joints])
-        self.axes = np.array([j.axis for j in self.joints], dtype=float)
-        self.is_revolute = np.array([j.kind == REVOLUTE for j in self.joints])
-        self.generators = np.array([
+        put("n_coordinates", n)
+        put("coordinate_names", tuple(j.name for j in self.joints))
+        put("_index", MappingProxyType({nm: k for k, nm in enumerate(self.coordinate_names)}))
+        put("origins", frozen_array([j.origin for j in self.joints]))
+        put("axes", frozen_array([j.axis for j in self.joints]))
+        put("is_revolute", frozen_array([j.kind == REVOLUTE for j in self.joints], dtype=bool))
+        put("generators", frozen_array([
             tf.revolute_generator(a) if rev else tf.prismatic_generator(a)
-            for a, rev in zip(self.axes, self.is_revolute)])
-        self.pseudo_inertias = np.array([
+            for a, rev in zip(self.axes, self.is_revolute)]))
+        put("pseudo_inertias", frozen_array([
             lk.inertia.pseudo_inertia() if lk.inertia is not None else np.zeros((4, 4))
-            for lk in self.links])
-        self.stiffness = np.array([j.stiffness for j in self.joints], dtype=float)
-        self.spring_reference = np.array([j.spring_reference for j in self.joints], dtype=float)
-        self.damping = np.array([j.damping for j in self.joints], dtype=float)
-        self.lower_limits = np.array([j.limits[0] for j in self.joints], dtype=float)
-        self.upper_limits = np.array([j.limits[1] for j in self.joints], dtype=float)
-        self._drive_indices = np.array([self._index.get(d.joint, -1) for d in self.drives], dtype=int)
-        for arr in (self.gravity, self.gamma, self.origins, self.axes, self.generators,
-                    self.pseudo_inertias,
-                    self.stiffness, self.spring_reference, self.damping, self.is_revolute):
-            arr.setflags(write=False)
+            for lk in self.links]))
+        put("stiffness", frozen_array([j.stiffness for j in self.joints]))
+        put("spring_reference", frozen_array([j.spring_reference for j in self.joints]))
+        put("damping", frozen_array([j.damping for j in self.joints]))
+        put("lower_limits", frozen_array([j.limits[0] for j in self.joints]))
+        put("upper_limits", frozen_array([j.limits[1] for j in self.joints]))
+        put("_drive_indices", frozen_array([self._index.get(d.joint, -1) for d in self.drives],
+                                           dtype=int))
+        put("_frozen", True)
+
+    def _init_attr(self, attr, value):
+        object.__setattr__(self, attr, value)
+
+    def __setattr__(self, attr, value):
+        raise AttributeError(f"Model is immutable: cannot set {attr!r}; build a changed model "
+                             "with Model.with_changes or a ChainBuilder")
+
+    def __delattr__(self, attr):
+        raise AttributeError(f"Model is immutable: cannot delete {attr!r}")
+
+    def __reduce__(self):
+        # the read-only mapping does not pickle; rebuilt from the parts (e.g. for workers)
+        return (Model, (self.joints, self.links, dict(self.frames), self.drives,
+                        tuple(self.gravity), self.flexible_links, self.name))
 
     # ------------------------------------------------------------------ lookup
     def index(self, name):
