@@ -114,7 +114,7 @@ def test_hollow_rectangle_torsion_constant_within_the_stated_accuracy(w, h, t, n
     """The docstring says Bredt underestimates J by about t/(2b), b the smaller side
     (thin-wall theory is first order in t/b).  Checked: -0.6 t/b <= J_Bredt/J - 1 <= 0,
     with J from the Prandtl FD solution (its own error ~1e-3 at these grids: the
-    re-entrant corners slow its O(h^2) rate; measured change n = 200 -> 400 below 6e-4)."""
+    re-entrant corners slow its O(h^2) rate; measured change n = 200 -> 400 below 7e-4)."""
     j_fd = prandtl_torsion_constant(w, h, t, n)
     j = BeamSection.hollow_rectangle(w, h, t).torsion_constant
     err = j / j_fd - 1
