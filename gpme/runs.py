@@ -1,9 +1,10 @@
 """Run a scenario with gpme and write its history and figures (used by `gpme simulate` and
 the gpme step of `gpme verify`)."""
+import json
 import re
 from pathlib import Path
 
-from gpme_core.atomic import atomic_save_figure, atomic_write_csv
+from gpme_core.atomic import atomic_save_figure, atomic_write_csv, atomic_write_text
 from gpme_core.errors import ModelError
 from gpme_core.integrate import METHODS, simulate, suggest_rk4_step
 
@@ -46,12 +47,24 @@ def slug(name):
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "model"
 
 
+def events_json(df):
+    """The run's events as JSON text: {"dependent": [names at t = 0], "dependent_final":
+    [...], "events": df.attrs["events"]} (see gpme_core.integrate.simulate; times in s)."""
+    return json.dumps({"dependent": list(df.attrs.get("dependent", [])),
+                       "dependent_final": list(df.attrs.get("dependent_final", [])),
+                       "events": list(df.attrs.get("events", []))}, indent=2) + "\n"
+
+
 def write_run_outputs(scenario, df, out_dir):
-    """<out_dir>/<name>.csv and <name>_<figure>.png for one run; returns {label: path}."""
+    """<out_dir>/<name>.csv and <name>_<figure>.png for one run, and <name>_events.json
+    when the run switched its dependent coordinates; returns {label: path}."""
     out = Path(out_dir)
     stem = slug(scenario.name)
     paths = {f"{stem}.csv": out / f"{stem}.csv"}
     atomic_write_csv(df, paths[f"{stem}.csv"])
+    if df.attrs.get("events"):
+        paths[f"{stem}_events.json"] = out / f"{stem}_events.json"
+        atomic_write_text(paths[f"{stem}_events.json"], events_json(df))
     for name, make in figures.FIGURES.items():
         path = out / f"{stem}_{name}"
         atomic_save_figure(make(scenario, df), path)

@@ -16,7 +16,13 @@ The constraint reactions follow from the solution: F_r = M q_ddot - (h + Q) = A^
 (generalized forces that realise the programmed motion), lambda = A_dc^-T F_r[dc].
 
 Baumgarte stabilisation: Phi_ddot + 2 alpha Phi_dot + beta^2 Phi = 0 (alpha, beta in 1/s).
+
+Any partition with a regular A_dc gives the same q_ddot (N spans the null space of A), so
+the partition may change during a run without changing the motion: ``solve(...,
+switch_below=SWITCH_RCOND)`` re-chooses the dependent coordinates by pivoting when the
+given ones are badly conditioned (see :func:`partition_rcond`).
 """
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,9 +33,24 @@ from .constraints import bind_constraints, evaluate_constraints
 from .dynamics import dynamics_terms
 from .errors import ConstraintError, ModelError
 
-# A_dc with a reciprocal condition number below this is treated as singular: the
-# dependent velocities would lose more than ~10 of 16 significant digits.
+# A partition whose reciprocal condition number (:func:`partition_rcond`: A_dc against the
+# whole Jacobian) is below this is treated as singular: the dependent velocities would
+# lose more than ~10 of 16 significant digits.
 SINGULAR_RCOND = 1e-10
+# A run (gpme_core.integrate.simulate) re-chooses the dependent coordinates when the
+# partition's reciprocal condition number (:func:`partition_rcond`) falls below this.
+# Why 1e-3: a solve with a partition of reciprocal condition r loses about log10(1/r) of
+# the 16 significant digits (errors ~ eps / r in Gamma and q_ddot).  Every evaluation that
+# finds r < SWITCH_RCOND switches before solving, so no solve of a run loses more than 3
+# digits to its partition (12 remain, far below any integrator error we accept), whereas
+# without switching the loss is unbounded and the run stops at SINGULAR_RCOND.  A switch
+# costs one pivoted QR of A and does not change the motion.  A smaller value (down to
+# sqrt(eps) ~ 1.5e-8, half the digits) would be as accurate, but then a path crossing a
+# configuration where the partition is singular would mostly pass between two evaluations
+# unnoticed, keeping a partition that is poor on both sides of it; at 1e-3 the window in
+# which the switch is triggered is wide enough to be hit by the RK4 stages (dt / 2 apart)
+# whenever r falls slower than 2e-3 / dt per second.
+SWITCH_RCOND = 1e-3
 DAMPING_FORMS = ("lagrange", "paper-eq7")
 
 
@@ -38,7 +59,9 @@ class GpmeSolution:
     """Everything computed at one (t, q, q_dot).  Shapes: n coordinates, m constraints.
 
     q_ddot (n,), phi (m,), phi_dot (m,), jacobian A (m, n), kappa (m,), multipliers (m,),
-    reaction_forces (n,) = A^T multipliers, terms: the DynamicsTerms used.
+    reaction_forces (n,) = A^T multipliers, terms: the DynamicsTerms used, dependent: the
+    names of the dependent coordinates used (the system's own unless ``solve`` switched),
+    partition_rcond: their :func:`partition_rcond` (1.0 without constraints).
     """
 
     t: float
@@ -50,6 +73,8 @@ class GpmeSolution:
     multipliers: np.ndarray
     reaction_forces: np.ndarray
     terms: object
+    dependent: tuple = ()
+    partition_rcond: float = 1.0
 
 
 class ProgrammedMotion:
@@ -107,13 +132,28 @@ class ProgrammedMotion:
                            dtype=int)
         self.independent = tuple(self.model.coordinate_names[k] for k in self.ic)
 
-    def choose_dependent(self, t, q, q_dot=None):
-        """Pick dependent coordinates by column-pivoted QR of A(q, t); returns their names."""
+    def with_dependent(self, names):
+        """A copy of this system with dependent coordinates ``names`` (this one unchanged).
+
+        The copy shares the model and the bound constraints (neither is modified by a
+        solve); only the partition is its own."""
+        other = copy.copy(self)
+        other.set_dependent(names)
+        return other
+
+    def pivoted_dependent(self, t, q, q_dot=None):
+        """Names of m dependent coordinates chosen by column-pivoted QR of A(q, t), without
+        changing this system; ConstraintError when A has rank < m.
+
+        t s; q (n,), q_dot (n,) ordered as model.coordinate_names (q_dot None = zeros)."""
         if self.n_constraints == 0:
-            self.set_dependent(())
             return ()
-        q_dot = np.zeros_like(q) if q_dot is None else q_dot
+        q = np.asarray(q, dtype=float)
+        q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
         _, _, a, _ = self.constraints(t, q, q_dot)
+        return self._pivoted_names(a, t, q)
+
+    def _pivoted_names(self, a, t, q):
         _, r, piv = sla.qr(a, pivoting=True, mode="economic")
         diag = np.abs(np.diag(r))
         if diag.min() <= SINGULAR_RCOND * max(diag.max(), 1e-300):
@@ -121,9 +161,15 @@ class ProgrammedMotion:
                 f"at t = {t:.6g} s the constraint Jacobian has rank < {self.n_constraints}: "
                 f"the constraints {list(self.constraint_names)} are dependent or cannot be "
                 f"controlled by any coordinate at q = {np.round(q, 6).tolist()}")
-        names = [self.model.coordinate_names[k] for k in piv[:self.n_constraints]]
+        return tuple(self.model.coordinate_names[k] for k in piv[:self.n_constraints])
+
+    def choose_dependent(self, t, q, q_dot=None):
+        """Set the dependent coordinates of this system to :meth:`pivoted_dependent`'s
+        choice at (t, q, q_dot); returns their names.  (gpme_core.integrate.simulate does
+        not call this: it keeps the partition of a run in its own copy.)"""
+        names = self.pivoted_dependent(t, q, q_dot)
         self.set_dependent(names)
-        return tuple(names)
+        return names
 
     def _require_partition(self):
         if self.dependent is None:
@@ -141,24 +187,31 @@ class ProgrammedMotion:
     def velocity_map(self, a, t=0.0, q=None):
         """Gamma = dq_dot_dc/dq_dot_ic = -A_dc^-1 A_ic (m, n - m), checking A_dc."""
         self._require_partition()
-        a_dc = a[:, self.dc]
+        return self._velocity_map(a, self.ic, self.dc, self.dependent, t, q)
+
+    @staticmethod
+    def _velocity_map(a, ic, dc, names, t, q):
+        a_dc = a[:, dc]
         try:
             inv = np.linalg.inv(a_dc)    # m x m, m small: explicit inverse is cheapest
         except np.linalg.LinAlgError:
             inv = np.full_like(a_dc, np.inf)
-        rcond = _rcond(a_dc, inv)
+        rcond = _relative_rcond(a, dc, _rcond(a_dc, inv))
         if not rcond > SINGULAR_RCOND:
-            qs = "" if q is None else f" at q = {np.round(q, 6).tolist()}"
-            raise ConstraintError(
-                f"at t = {t:.6g} s the dependent block K_dc of the constraint Jacobian "
-                f"(columns {list(self.dependent)}) is singular (reciprocal condition "
-                f"{rcond:.2e} <= {SINGULAR_RCOND:.0e}){qs}: these coordinates cannot realise "
-                "the constraints here; choose other dependent coordinates or keep the "
-                "programmed path away from this configuration")
-        return -inv @ a[:, self.ic], inv
+            raise _singular_partition(names, rcond, t, q)
+        return -inv @ a[:, ic], inv
 
-    def solve(self, t, q, q_dot):
-        """:class:`GpmeSolution` of the reduced equations at (t, q, q_dot)."""
+    def solve(self, t, q, q_dot, switch_below=None):
+        """:class:`GpmeSolution` of the reduced equations at (t, q, q_dot).
+
+        t s; q (n,), q_dot (n,) ordered as model.coordinate_names.
+        switch_below : None (default) solves with this system's dependent coordinates and
+                       raises ConstraintError where their block is singular; a number r
+                       (e.g. SWITCH_RCOND) solves with :meth:`pivoted_dependent`'s choice
+                       instead when the system's partition has partition_rcond < r and
+                       the pivoted one is better (``solution.dependent`` says which was
+                       used).  This system is never changed.
+        """
         self._require_partition()
         q = np.asarray(q, dtype=float)
         q_dot = np.asarray(q_dot, dtype=float)
@@ -173,33 +226,26 @@ class ProgrammedMotion:
             return GpmeSolution(t, q_ddot, z, z, np.zeros((0, n)), z, z, np.zeros(n), terms)
         phi, phi_dot, a, kappa = self.constraints(t, q, q_dot, terms.kin)
         constraint_rhs = -kappa - 2.0 * self.alpha * phi_dot - self.beta ** 2 * phi
-        if fast.ENABLED:
-            q_ddot, lam, rcond, ok = fast.reduced_solve(terms.M, rhs, a, constraint_rhs,
-                                                        self.ic, self.dc)
-            if not rcond > SINGULAR_RCOND:
-                self.velocity_map(a, t, q)      # raises the ConstraintError with details
-            if not ok:
-                raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular "
-                                      f"at q = {np.round(q, 6).tolist()}")
-            return GpmeSolution(t, q_ddot, phi, phi_dot, a, kappa, lam, a.T @ lam, terms)
-        gamma, inv_dc = self.velocity_map(a, t, q)
-        # N^T X for X with rows ordered as q: X[ic] + Gamma^T X[dc]
-        proj_m = terms.M[self.ic] + gamma.T @ terms.M[self.dc]
-        proj_rhs = rhs[self.ic] + gamma.T @ rhs[self.dc]
-        lhs = np.empty((n, n))
-        lhs[:n - m] = proj_m
-        lhs[n - m:] = a
-        b = np.empty(n)
-        b[:n - m] = proj_rhs
-        b[n - m:] = constraint_rhs
-        try:
-            q_ddot = np.linalg.solve(lhs, b)
-        except np.linalg.LinAlgError:
-            raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular at "
-                                  f"q = {np.round(q, 6).tolist()}") from None
-        reaction = terms.M @ q_ddot - rhs
-        lam = inv_dc.T @ reaction[self.dc]
-        return GpmeSolution(t, q_ddot, phi, phi_dot, a, kappa, lam, a.T @ lam, terms)
+        names, ic, dc = self.dependent, self.ic, self.dc
+        q_ddot, lam, rcond, ok = _reduced_solve(terms.M, rhs, a, constraint_rhs, ic, dc)
+        rel = _relative_rcond(a, dc, rcond)
+        if switch_below is not None and not rel >= switch_below:
+            new = self._pivoted_names(a, t, q)
+            if new != names:
+                new_dc = np.array([self.model.index(nm) for nm in new], dtype=int)
+                new_ic = np.setdiff1d(np.arange(n), new_dc)
+                trial = _reduced_solve(terms.M, rhs, a, constraint_rhs, new_ic, new_dc)
+                new_rel = _relative_rcond(a, new_dc, trial[2])
+                if new_rel > rel:
+                    names, ic, dc, rel = new, new_ic, new_dc, new_rel
+                    q_ddot, lam, rcond, ok = trial
+        if not rel > SINGULAR_RCOND:
+            raise _singular_partition(names, rel, t, q)
+        if not ok:
+            raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular "
+                                  f"at q = {np.round(q, 6).tolist()}")
+        return GpmeSolution(t, q_ddot, phi, phi_dot, a, kappa, lam, a.T @ lam, terms,
+                            tuple(names), float(rel))
 
     def accelerations(self, t, q, q_dot):
         """(n,) q_ddot from the reduced GPME form."""
@@ -258,6 +304,77 @@ class ProgrammedMotion:
         phi_t = phi_dot - a @ q_dot
         q_dot[self.dc] = gamma @ q_dot[self.ic] - inv_dc @ phi_t
         return q, q_dot
+
+
+def _singular_partition(names, rcond, t, q):
+    qs = "" if q is None else f" at q = {np.round(q, 6).tolist()}"
+    return ConstraintError(
+        f"at t = {t:.6g} s the dependent block K_dc of the constraint Jacobian "
+        f"(columns {list(names)}) is singular (reciprocal condition {rcond:.2e} <= "
+        f"{SINGULAR_RCOND:.0e}, measured against the whole Jacobian){qs}: these coordinates "
+        "cannot realise the constraints here; choose other dependent coordinates or keep "
+        "the programmed path away from this configuration")
+
+
+def partition_rcond(a, dc):
+    """Reciprocal condition of the partition with dependent columns ``dc`` of A:
+    1 / (||A_dc^-1||_1 ||A||_1), in [0, 1].
+
+    a : (m, n) constraint Jacobian; dc : (m,) indices of the dependent coordinates.
+    It is the reciprocal condition number of A_dc measured against the whole Jacobian
+    rather than against A_dc alone: for one constraint (m = 1) rcond(A_dc) is 1 for any
+    non-zero entry, however small beside the other columns, whereas this measure is
+    |a_dc| / max_j |a_j| and falls to 0 as the dependent column vanishes.  It is at most
+    rcond(A_dc), and 0 when A_dc is singular.
+    """
+    a = np.asarray(a, dtype=float)
+    dc = np.asarray(dc, dtype=int)
+    a_dc = a[:, dc]
+    try:
+        inv = np.linalg.inv(a_dc)
+    except np.linalg.LinAlgError:
+        return 0.0
+    return _relative_rcond(a, dc, _rcond(a_dc, inv))
+
+
+def _relative_rcond(a, dc, rcond):
+    """partition_rcond from rcond(A_dc) (1-norm): rcond * ||A_dc||_1 / ||A||_1."""
+    col = np.abs(a).sum(axis=0)
+    norm_a = col.max()
+    if not (rcond > 0.0 and norm_a > 0.0):
+        return 0.0
+    return float(rcond * col[dc].max() / norm_a)
+
+
+def _reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
+    """(q_ddot (n,), multipliers (k,), rcond(A_dc) (1-norm), ok) of the reduced equations
+    for the partition (ic, dc); never raises (ok False or rcond <= SINGULAR_RCOND: the
+    caller raises).  Compiled kernel when gpme_core.fast is enabled, numpy otherwise."""
+    if fast.ENABLED:
+        return fast.reduced_solve(m, rhs, a, constraint_rhs, ic, dc)
+    n, k = m.shape[0], dc.shape[0]
+    a_dc = a[:, dc]
+    try:
+        inv = np.linalg.inv(a_dc)    # k x k, k small: explicit inverse is cheapest
+    except np.linalg.LinAlgError:
+        return np.zeros(n), np.zeros(k), 0.0, False
+    rcond = _rcond(a_dc, inv)
+    if not rcond > SINGULAR_RCOND:
+        return np.zeros(n), np.zeros(k), rcond, False
+    gamma = -inv @ a[:, ic]
+    # N^T X for X with rows ordered as q: X[ic] + Gamma^T X[dc]
+    lhs = np.empty((n, n))
+    lhs[:n - k] = m[ic] + gamma.T @ m[dc]
+    lhs[n - k:] = a
+    b = np.empty(n)
+    b[:n - k] = rhs[ic] + gamma.T @ rhs[dc]
+    b[n - k:] = constraint_rhs
+    try:
+        q_ddot = np.linalg.solve(lhs, b)
+    except np.linalg.LinAlgError:
+        return np.zeros(n), np.zeros(k), rcond, False
+    reaction = m @ q_ddot - rhs
+    return q_ddot, inv.T @ reaction[dc], rcond, True
 
 
 def _rcond(a, inv):

@@ -8,7 +8,13 @@ work integrals (J) are integrated with the same scheme, so the energy balance
 
 holds to the integrator's order (W_reaction is the work of the constraint reactions,
 non-zero for time-dependent constraints and while Baumgarte pulls onto the manifold).
+
+A run keeps its own copy of the system's partition into dependent and independent
+coordinates: the system passed to :func:`simulate` is not changed.  When the partition
+becomes badly conditioned (gpme_core.gpme.SWITCH_RCOND) the run re-chooses it by pivoting
+and records the switch in ``df.attrs["events"]`` (see :func:`simulate`).
 """
+import logging
 import time
 
 import numpy as np
@@ -17,6 +23,9 @@ from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
 from .errors import ConstraintError, ModelError, SimulationError
+from .gpme import SWITCH_RCOND, partition_rcond
+
+log = logging.getLogger("gpme.integrate")
 
 METHODS = ("RK4", "RK45", "DOP853", "Radau")
 IMPLICIT_METHODS = ("Radau",)
@@ -61,13 +70,53 @@ def suggest_rk4_step(model, q, safety=0.5):
     return safety * float(min(steps))
 
 
-def _rhs_factory(system):
-    model = system.model
-    n = model.n_coordinates
+class RunPartition:
+    """The partition of one run: its own copy of the system, switched when badly
+    conditioned.
 
+    system       : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
+                   (copied: the object given is never changed)
+    switch_below : re-choose the dependent coordinates when the partition's
+                   gpme_core.gpme.partition_rcond falls below it (None: never)
+    events       : list the switches are appended to (None: not recorded), each a dict
+                   {"event": "dependent_switch", "t": s, "old_dependent": [names],
+                   "new_dependent": [names], "rcond": partition_rcond of the old
+                   partition that triggered it, "new_rcond": of the new one}
+    """
+
+    def __init__(self, system, switch_below=SWITCH_RCOND, events=None):
+        self.system = system.with_dependent(system.dependent)
+        self.switch_below = switch_below
+        self.events = events
+
+    @property
+    def dependent(self):
+        """Names of the current dependent coordinates."""
+        return self.system.dependent
+
+    def solve(self, t, q, q_dot):
+        """GpmeSolution at (t, q, q_dot), switching the partition first if needed."""
+        sol = self.system.solve(t, q, q_dot, switch_below=self.switch_below)
+        if sol.dependent != self.system.dependent:
+            old = self.system
+            self.system = old.with_dependent(sol.dependent)
+            if self.events is not None:
+                event = {"event": "dependent_switch", "t": float(t),
+                         "old_dependent": list(old.dependent),
+                         "new_dependent": list(sol.dependent),
+                         "rcond": partition_rcond(sol.jacobian, old.dc),
+                         "new_rcond": sol.partition_rcond}
+                self.events.append(event)
+                log.info("t = %.6g s: dependent coordinates %s -> %s (partition rcond "
+                         "%.2e < %.0e)", t, event["old_dependent"], event["new_dependent"],
+                         event["rcond"], self.switch_below)
+        return sol
+
+
+def _rhs_factory(partition, n):
     def rhs(t, y):
         q, q_dot = y[:n], y[n:2 * n]
-        sol = system.solve(t, q, q_dot)
+        sol = partition.solve(t, q, q_dot)
         terms = sol.terms
         dy = np.empty_like(y)
         dy[:n] = q_dot
@@ -164,7 +213,8 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n):
 
 
 def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
-             rtol=1e-8, atol=1e-10, on_manifold=False, progress=False):
+             rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
+             switch_rcond=SWITCH_RCOND):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
@@ -174,11 +224,23 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
     output_dt  : s, spacing of the recorded rows (a multiple of dt for RK4)
     on_manifold: start on the constraints: dependent q and q_dot solved from Phi = 0,
                  Phi_dot = 0 at t = 0 (otherwise start where given, as the paper does)
+    switch_rcond: re-choose the dependent coordinates (pivoted QR of A) whenever their
+                 gpme_core.gpme.partition_rcond falls below this (default SWITCH_RCOND,
+                 see there for the value); None keeps them and stops with a
+                 ConstraintError where they become singular
+
+    ``system`` is not changed: without dependent coordinates, the run chooses its own at
+    t = 0 by pivoting (``df.attrs["dependent"]``), and every switch happens in the run's
+    copy.  The motion does not depend on the partition (up to round-off).
 
     Returns a DataFrame with columns t, <coordinate>, <coordinate>_dot, <constraint>,
     <constraint>_dot, lambda_<constraint>, tau_<driven coordinate>, x_<frame>, y_<frame>,
     z_<frame> (world position of every named frame, m), E_kin, E_pot,
-    W_dissipated, W_drive, W_reaction, E_balance_error; run metadata in ``df.attrs``.
+    W_dissipated, W_drive, W_reaction, E_balance_error; run metadata in ``df.attrs``,
+    among them "dependent" (at t = 0), "dependent_final" and "events": a list of dicts, one
+    per switch of the dependent coordinates (keys in :class:`RunPartition`), in the order
+    they happened; with the solve_ivp methods "t" is the time of the evaluation that
+    switched, which may belong to a step the method later rejected.
     """
     model = system.model
     n = model.n_coordinates
@@ -199,12 +261,18 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
         problems.append(f"dt must be positive (s), got {dt!r}")
     if problems:
         raise ModelError(problems)
-    if system.dependent is None:
-        system.choose_dependent(0.0, q0, q_dot0)
+    if switch_rcond is not None and not switch_rcond > 0:
+        raise ModelError(f"switch_rcond must be a positive number or None, got {switch_rcond!r}")
+    dependent = system.dependent
+    if dependent is None:
+        dependent = system.pivoted_dependent(0.0, q0, q_dot0)
+    start_system = system.with_dependent(dependent)     # the caller's system is not changed
     if on_manifold:
-        q0, q_dot0 = system.consistent_state(0.0, q0, q_dot0)
+        q0, q_dot0 = start_system.consistent_state(0.0, q0, q_dot0)
     y0 = np.concatenate([q0, q_dot0, np.zeros(N_WORK)])
-    rhs = _rhs_factory(system)
+    events = []
+    partition = RunPartition(start_system, switch_rcond, events)
+    rhs = _rhs_factory(partition, n)
     start = time.perf_counter()
     nfev = None
     if method == "RK4":
@@ -214,17 +282,26 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
     else:
         ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n)
     wall = time.perf_counter() - start
-    df = history_frame(system, ts, ys)
+    df = history_frame(start_system, ts, ys, switch_rcond)
     df.attrs.update(model=model.name, method=method, dt=dt if method == "RK4" else None,
                     rtol=None if method == "RK4" else rtol, wall_time_s=wall,
-                    rhs_evaluations=nfev, dependent=list(system.dependent),
+                    rhs_evaluations=nfev, dependent=list(dependent),
+                    dependent_final=list(partition.dependent), events=events,
+                    switch_rcond=switch_rcond,
                     baumgarte=(system.alpha, system.beta), on_manifold=on_manifold)
     return df
 
 
-def history_frame(system, ts, ys):
-    """Tidy DataFrame of a run: one row per recorded time (see :func:`simulate`)."""
+def history_frame(system, ts, ys, switch_rcond=SWITCH_RCOND):
+    """Tidy DataFrame of a run: one row per recorded time (see :func:`simulate`).
+
+    system : ProgrammedMotion with its dependent coordinates set (not changed); the rows
+             are solved with a partition switched as in a run (``switch_rcond``), which
+             does not change any column (multipliers included: A has full row rank).
+    ts (k,) s; ys (k, 2 n + 3) states as integrated by :func:`simulate`.
+    """
     model = system.model
+    partition = RunPartition(system, switch_rcond)
     n = model.n_coordinates
     names = list(model.coordinate_names)
     cols = {"t": ts}
@@ -244,7 +321,7 @@ def history_frame(system, ts, ys):
     taus = np.empty((len(ts), len(drive_idx)))
     for r, (t, y) in enumerate(zip(ts, ys)):
         q, q_dot = y[:n], y[n:2 * n]
-        sol = system.solve(t, q, q_dot)
+        sol = partition.solve(t, q, q_dot)
         phis[r], phis_dot[r], lams[r] = sol.phi, sol.phi_dot, sol.multipliers
         e_k[r] = kinetic_energy(model, sol.terms.kin, q_dot)
         e_p[r] = potential_energy(model, q)
