@@ -12,7 +12,11 @@ violation, has fallen below PHI_TOL.abs / 1000; a run started on them from t = 0
 import numpy as np
 import pandas as pd
 
+from gpme_core.elastic_loads import SMALL_ANGLE_LIMIT, STRESS_SAFETY_FACTOR, elastic_peaks
+
 from .compare import Tolerance, compare
+
+WARNING = "WARNING: "   # prefix of the reason of an information row whose limit is exceeded
 
 # After the transient the constraints hold to the RK4 truncation error of the dependent
 # coordinates (Baumgarte pulls back any drift at rate r); on the paper's crane that was
@@ -81,7 +85,44 @@ def run_rows(scenario, df, tolerances=None):
     row.update(entry=f"t = {df['t'].loc[k]:.4f} s", scale=scale,
                rel_error=abs(err) / scale if scale > 0 else np.nan)
     rows.append(row)
+    rows += elastic_rows(scenario, df, case)
     return rows
+
+
+def elastic_rows(scenario, df, case):
+    """Information rows of the peak element angles and bending stress of every RFEM link
+    (gpme_core.elastic_loads): the run's distance from the limits of the model's validity.
+    A row whose limit is exceeded has a reason starting with WARNING."""
+    rows = []
+    for peak in elastic_peaks(scenario.model, df, getattr(scenario, "yield_strengths", None)):
+        allowed = peak.allowed_stress
+        items = (
+            ("peak bending angle", peak.bending_angle, peak.bending_sde, peak.bending_time,
+             SMALL_ANGLE_LIMIT, f"rad; sqrt(psi^2 + theta^2) of an sde; small-angle limit "
+             f"{SMALL_ANGLE_LIMIT} rad of the linear RFEM springs on Euler angles"),
+            ("peak torsion angle", peak.torsion_angle, peak.torsion_sde, peak.torsion_time,
+             SMALL_ANGLE_LIMIT, f"rad; |phi| of an sde; small-angle limit {SMALL_ANGLE_LIMIT} rad"),
+            ("peak bending stress", peak.bending_stress, peak.stress_sde, peak.stress_time,
+             allowed, "Pa; from the sde spring moments; " + (
+                 f"allowed: yield {peak.yield_strength:.4g} Pa / {STRESS_SAFETY_FACTOR}"
+                 if allowed is not None else "no yield strength given: no elasticity verdict")),
+        )
+        for quantity, value, sde, t, limit, what in items:
+            exceeded = limit is not None and value > limit
+            reason = (WARNING if exceeded else "information: ") + what + \
+                (f"; exceeded ({value:.3g} > {limit:.3g})" if exceeded else "")
+            row = compare("gpme", scenario.name, f"{quantity} ({peak.link})", case, value,
+                          value, Tolerance(np.inf, 0.0, reason))
+            row.update(entry=f"sde {sde}, t = {t:.4f} s")
+            rows.append(row)
+    return rows
+
+
+def run_warnings(rows):
+    """The reasons of the rows whose validity limit was exceeded (WARNING ...), with their
+    model and quantity, as sentences."""
+    return [f"{r['model']}: {r['quantity']} = {r['gpme_value']:.4g} at {r['entry']}: "
+            f"{r['reason']}" for r in rows if str(r.get("reason", "")).startswith(WARNING)]
 
 
 def smallest_singular_values(scenario, df, samples=200):

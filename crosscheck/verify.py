@@ -154,6 +154,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
 
 
 def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
+    from .run_checks import run_warnings
     start = time.perf_counter()
     tables, runs, timings = {}, None, {}
     record = _models_record(scenarios if scenarios is not None else
@@ -192,6 +193,9 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
     summary = summarise(rows, keys=("engine", "section", "model", "quantity"))
     summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
                                 for r in summary.itertuples()])
+    warnings = run_warnings(rows.to_dict("records")) if "reason" in rows.columns else []
+    for warning in warnings:
+        _say(f"WARNING {warning}")
     meta = environment(quick=quick, only=only, run_id=run_id,
                        wall_time_s=time.perf_counter() - start, step_times_s=timings)
     write_csv(summary, staging / "summary.csv")
@@ -199,6 +203,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
         "run": meta,
         "passed": not bool(_failed(summary).any()),
         "models": record,
+        "warnings": warnings,
         "checks": [{"name": r["check"], "engine": r["engine"], "model": r["model"],
                     "quantity": r["quantity"], "n_compared": int(r["n_compared"]),
                     "worst_abs_error": _num(r["worst_abs_error"]),
@@ -252,9 +257,12 @@ def main(args):
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
                                      progress=not args.no_progress, scenarios=scenarios)
     cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
-            "worst_rel_error", "passed"]
+            "worst_rel_error", "status"]
+    status = summary.apply(_status, axis=1)
     with pd.option_context("display.width", 200, "display.max_rows", 500):
-        print(summary[cols].to_string(index=False))
+        print(summary.assign(status=status)[cols].to_string(index=False))
     n_fail = int(_failed(summary).sum())
-    print(f"{len(summary)} checks, {n_fail} failed; report: {run_dir / 'index.html'}")
+    n_pass, n_info = int((status == "pass").sum()), int((status == "info").sum())
+    print(f"{len(summary)} checks: {n_pass} passed, {n_fail} failed, {n_info} information "
+          f"only (not gated); report: {run_dir / 'index.html'}")
     return 1 if n_fail else 0

@@ -54,12 +54,19 @@ def _simulate_paper(args):
         print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
               f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
               f"{s['max_abs_Phi_2_after_transient']:.2e} after the transient")
+        for peak in s["elastic_peaks"]:
+            print(f"  {peak['link']}: peak sde bending angle {peak['bending_angle']:.3g} rad, "
+                  f"torsion {peak['torsion_angle']:.3g} rad, bending stress "
+                  f"{peak['bending_stress'] / 1e6:.4g} MPa (allowed "
+                  f"{peak['allowed_stress'] / 1e6:.4g} MPa)")
+            for warning in peak["warnings"]:
+                print(f"  WARNING: {warning}")
     return paper.write_outputs(runs, args.out)
 
 
 def _simulate_models(args):
     from gpme.runs import simulate_scenario, write_run_outputs
-    from crosscheck.run_checks import run_rows
+    from crosscheck.run_checks import WARNING, run_rows
     paths = {}
     for scenario in load_scenarios(args.model):
         t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
@@ -70,7 +77,9 @@ def _simulate_models(args):
         print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
         for row in run_rows(scenario, df):
             if row["status"] == "info":
-                print(f"  {row['quantity']}: {row['gpme_value']:.3g} at {row['entry']} (information)")
+                flag = "WARNING, " + row["reason"] if row["reason"].startswith(WARNING) \
+                    else "information"
+                print(f"  {row['quantity']}: {row['gpme_value']:.3g} at {row['entry']} ({flag})")
             else:
                 print(f"  {row['quantity']}: {row['abs_error']:.2e} at {row['entry']} "
                       f"({'ok' if row['status'] == 'pass' else 'FAIL'}, tolerance "

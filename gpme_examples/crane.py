@@ -32,7 +32,7 @@ from gpme_core.constraints import CoordinateProgramme, EllipseConstraint
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import cuboid, cylinder
 from gpme_core.model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
-from gpme_core.rfem import BeamProperties
+from gpme_core.rfem import BeamProperties, BeamSection
 from gpme_core.statics import static_equilibrium
 from gpme_core.time_functions import Cosine, QuinticRamp
 
@@ -47,19 +47,22 @@ class CraneParameters:
     # base plate under the column foot
     base_mass: float = 5.0                  # kg
     base_size: tuple = (0.4, 0.4, 0.1)      # m, box centred 0.05 m below the column foot
-    # column: hollow steel-like tube
-    column_mass: float = 3.0                # kg
+    # slewing column: a drum carrying the slewing ring and counterweight, heavy enough
+    # that the paper's 1 N m slews it at a crane's pace (about 3.5 rad/s after 10 s)
+    column_mass: float = 40.0               # kg
     column_height: float = 1.0              # m, foot to arm pivot
-    column_radius: float = 0.05             # m, outer
-    column_inner_radius: float = 0.045      # m
-    # arm: solid round steel bar
+    column_radius: float = 0.25             # m, outer
+    column_inner_radius: float = 0.2        # m
+    # arm: round steel tube 20 x 1.5 mm (a light crane's boom tube)
     arm_length: float = 0.5                 # m, pivot to arm tip
-    arm_diameter: float = 0.014             # m
+    arm_diameter: float = 0.020             # m, outer
+    arm_wall_thickness: float = 0.0015      # m, 0 = solid bar
+    arm_yield_strength: float = 355e6       # Pa, structural steel S355 (EN 10025-2)
     steel_youngs_modulus: float = 210e9     # Pa
     steel_shear_modulus: float = 81e9       # Pa
     steel_density: float = 7850.0           # kg/m^3
-    arm_viscosity: float = 5e6              # Pa s, Kelvin-Voigt: 0.1 % of critical in the
-    #                                         1st bending mode; higher values overdamp the
+    arm_viscosity: float = 5e6              # Pa s, Kelvin-Voigt: 0.17 % of critical in the
+    #                                         1st bending mode (22 Hz); more overdamps the
     #                                         stiff RFEM torsion modes and force RK4 to tiny dt
     # slider rod
     slider_mass: float = 1.0                # kg
@@ -83,11 +86,17 @@ class CraneParameters:
     initial_psi3: float = np.pi / 4         # rad
     initial_z4: float = 0.2                 # m
 
+    def arm_section(self):
+        """BeamSection of the arm: a round tube, or a solid bar when arm_wall_thickness = 0."""
+        if self.arm_wall_thickness == 0.0:
+            return BeamSection.solid_circle(self.arm_diameter)
+        return BeamSection.tube(self.arm_diameter, self.arm_wall_thickness)
+
     def beam(self):
         """BeamProperties of the arm."""
-        return BeamProperties.solid_circular(self.arm_length, self.arm_diameter,
-                                             self.steel_youngs_modulus, self.steel_shear_modulus,
-                                             self.steel_density, self.arm_viscosity)
+        return BeamProperties.from_section(self.arm_length, self.arm_section(),
+                                           self.steel_youngs_modulus, self.steel_shear_modulus,
+                                           self.steel_density, self.arm_viscosity)
 
     def with_changes(self, **changes):
         return replace(self, **changes)

@@ -5,7 +5,8 @@ from pathlib import Path
 
 from . import figures
 from gpme_core.atomic import atomic_save_figure, atomic_write_csv
-from .crane import CraneParameters, crane_system, initial_state
+from .crane import CraneParameters, build_crane, crane_system, initial_state
+from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate
 
 DEFAULT_N_RFE = 3
@@ -45,11 +46,16 @@ def write_outputs(runs, out_dir, params=CraneParameters()):
     return paths
 
 
-def summary(df, transient=2.0):
-    """Largest |Phi_1|, |Phi_2| after ``transient`` s, the wall time and step count."""
+def summary(df, transient=2.0, params=CraneParameters()):
+    """Largest |Phi_1|, |Phi_2| after ``transient`` s, the wall time and step count, and
+    the arm's peak sde angles and bending stress (gpme_core.elastic_loads; flexible runs)."""
     late = df[df.t >= transient]
+    n = df.attrs.get("n_rfe", 0)
+    peaks = elastic_peaks(build_crane(n, params), df, {"arm": params.arm_yield_strength}) \
+        if n else []
     return {"case": df.attrs.get("case"), "n_rfe": df.attrs.get("n_rfe"),
             "max_abs_Phi_1_after_transient": float(late.Phi_1.abs().max()),
             "max_abs_Phi_2_after_transient": float(late.Phi_2.abs().max()),
             "wall_time_s": df.attrs.get("wall_time_s"), "dt": df.attrs.get("dt"),
-            "method": df.attrs.get("method")}
+            "method": df.attrs.get("method"),
+            "elastic_peaks": [p.as_record() for p in peaks]}

@@ -62,6 +62,8 @@ class Scenario:
                   and what it replaced (a link's inertial by its RFEM beam), one line each
     tolerances  : {check: ToleranceOverride}
     on_constraints: whether q0, q_dot0 were placed on the constraints
+    yield_strengths: {flexible link name: Pa}, the links whose elasticity can be judged
+                  (gpme_core.elastic_loads)
     """
 
     name: str
@@ -82,6 +84,7 @@ class Scenario:
     notes: tuple = ()
     tolerances: Mapping[str, ToleranceOverride] = field(default_factory=dict)
     on_constraints: bool = False
+    yield_strengths: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
         for name in ("q0", "q_dot0"):
@@ -90,6 +93,8 @@ class Scenario:
             object.__setattr__(self, name, a)
         object.__setattr__(self, "frozen", MappingProxyType(dict(self.frozen)))
         object.__setattr__(self, "tolerances", MappingProxyType(dict(self.tolerances)))
+        object.__setattr__(self, "yield_strengths",
+                           MappingProxyType(dict(self.yield_strengths)))
         object.__setattr__(self, "constraints", tuple(self.constraints))
         object.__setattr__(self, "notes", tuple(self.notes))
 
@@ -126,4 +131,6 @@ def crane_scenario(n_rfe=0, on_constraints=False, static_arm=False):
     return Scenario(name=system.model.name, model=system.model,
                     constraints=tuple(crane.crane_constraints(params)), system=system,
                     q0=q0, q_dot0=qd0, t_end=10.0, quick_t_end=2.0, integrator="RK4",
-                    dt=dt, output_dt=1e-3, on_constraints=on_constraints)
+                    dt=dt, output_dt=1e-3, on_constraints=on_constraints,
+                    yield_strengths={f.name: params.arm_yield_strength
+                                     for f in system.model.flexible_links})

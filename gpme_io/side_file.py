@@ -114,13 +114,16 @@ def side_file_problems(side: Any, label: str = "side file") -> list:
         if not isinstance(side.get(key, []), list):
             problems.append(f"{label}: {key} must be a list, got {side.get(key)!r}")
     beam_fields = {f.name for f in dataclasses.fields(BeamProperties)}
+    # optional: side files written before the section's extreme fibres were recorded
+    optional_beam_fields = {"extreme_fibre_y", "extreme_fibre_z"}
     for rec in side.get("flexible_links", []) if isinstance(side.get("flexible_links"), list) else []:
         if not isinstance(rec, dict) or not isinstance(rec.get("beam"), dict) or \
-                set(rec["beam"]) != beam_fields or not isinstance(rec.get("n_segments"), int) or \
+                not beam_fields - optional_beam_fields <= set(rec["beam"]) <= beam_fields or not isinstance(rec.get("n_segments"), int) or \
                 rec.get("n_segments", -1) < 0 or not isinstance(rec.get("joints"), list) or \
                 not isinstance(rec.get("links"), list):
             problems.append(f"{label}: flexible link record {rec!r} must have name, n_segments "
-                            f"(int >= 0), joints, links and beam with fields {sorted(beam_fields)}")
+                            f"(int >= 0), joints, links and beam with fields {sorted(beam_fields)} "
+                            f"({sorted(optional_beam_fields)} optional)")
     for rec in side.get("drives", []) if isinstance(side.get("drives"), list) else []:
         if isinstance(rec, dict) and rec.get("function") == EXPRESSION_DRIVE:
             from gpme_io.modelfile.expressions import parse_expression

@@ -68,6 +68,7 @@ PARAMETERS = {
     "steel_youngs_modulus": ("Pa", 0.0, False),
     "steel_shear_modulus": ("Pa", 0.0, False),
     "arm_diameter": ("m", 0.0, False),
+    "arm_wall_thickness": ("m", 0.0, True),
     "arm_length": ("m", 0.0, False),
     "arm_viscosity": ("Pa s", 0.0, True),
     "slider_mass": ("kg", 0.0, False),

@@ -10,7 +10,7 @@ import pytest
 
 from gpme.cli import main as gpme_main
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
-from gpme_core.integrate import simulate
+from gpme_core.integrate import simulate, suggest_rk4_step
 from gpme_study import metrics as mx
 from gpme_study.plots import safe_mask, write_plots
 from gpme_study.point import point_key, run_point
@@ -146,11 +146,12 @@ def tiny_sweep(cluster, tmp_path_factory):
     return spec, out, table
 
 
-def _direct(point, settings):
-    """The metrics recomputed from direct gpme_core runs, independently of gpme_study."""
+def _direct(point, settings, steps):
+    """The metrics recomputed from direct gpme_core runs, independently of gpme_study, with
+    the RK4 steps (rigid, flexible) the sweep chose (checked separately)."""
     params = CraneParameters().with_changes(**{k: v for k, v in point.items() if k != "n_rfe"})
     runs = {}
-    for n, dt in ((0, 1e-3), (1, 4e-4)):     # the steps the sweep chose (checked below)
+    for n, dt in zip((0, 1), steps):
         system = crane_system(n, params)
         q0, qd0 = initial_state(system.model, params)
         df = simulate(system, settings.t_end, q0, qd0, dt=dt, on_manifold=True,
@@ -176,8 +177,16 @@ def test_table_matches_direct_single_runs(tiny_sweep):
     assert list(table.status) == ["ok", "ok", "infeasible"]
     assert table.constraints_met.tolist() == [True, True, False]
     ok = table.iloc[0]
-    assert (ok.rigid_dt_s, ok.flexible_dt_s) == pytest.approx((1e-3, 4e-4), rel=1e-12)
-    direct = _direct(spec.points[0], spec.run)
+    # the steps: stable (below suggest_rk4_step's limit at the start, 2x the suggestion)
+    # and a whole number per output step, the rigid one at the 1e-3 s cap
+    params = CraneParameters().with_changes(**spec.points[0])
+    for n, dt in ((0, ok.rigid_dt_s), (1, ok.flexible_dt_s)):
+        system = crane_system(n, params)
+        limit = 2.0 * suggest_rk4_step(system.model, initial_state(system.model, params)[0])
+        per_output = spec.run.output_dt / dt
+        assert 0 < dt < limit and per_output == pytest.approx(round(per_output), abs=1e-9)
+    assert ok.rigid_dt_s == pytest.approx(1e-3, rel=1e-12)
+    direct = _direct(spec.points[0], spec.run, (ok.rigid_dt_s, ok.flexible_dt_s))
     for name, value in direct.items():
         # tolerance: identical computations in another process; 1e-9 relative allows
         # only for a different BLAS summation order, and 1e-15 absolute for Phi ~ 1e-13

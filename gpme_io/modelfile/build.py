@@ -264,7 +264,18 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                     integrator=run.integrator, dt=dt, output_dt=run.output_dt,
                     source=spec.path, urdf=source.urdf, chain=source.chain,
                     frozen=dict(source.frozen), notes=tuple(notes),
-                    tolerances=spec.tolerance_map(), on_constraints=spec.initial.on_constraints)
+                    tolerances=spec.tolerance_map(), on_constraints=spec.initial.on_constraints,
+                    yield_strengths=_yield_strengths(spec, model))
+
+
+def _yield_strengths(spec, model):
+    """{flexible link name: Pa} from [[flexible]] yield_strength, or the crane's arm."""
+    src = spec.model.source
+    if isinstance(src, CraneSource):
+        from gpme_examples.crane import CraneParameters
+        params = CraneParameters(**{**dict(src.overrides), "gravity": tuple(spec.model.gravity)})
+        return {f.name: params.arm_yield_strength for f in model.flexible_links}
+    return {f.link: f.yield_strength for f in spec.flexible if f.yield_strength is not None}
 
 
 def _constraint(c):

@@ -56,7 +56,8 @@ CRANE_FIELDS = {
     "base_mass": ("kg", ">0"), "base_size": ("m", "size"), "column_mass": ("kg", ">0"),
     "column_height": ("m", ">0"), "column_radius": ("m", ">0"),
     "column_inner_radius": ("m", ">=0"), "arm_length": ("m", ">0"),
-    "arm_diameter": ("m", ">0"), "steel_youngs_modulus": ("Pa", ">0"),
+    "arm_diameter": ("m", ">0"), "arm_wall_thickness": ("m", ">=0"),
+    "arm_yield_strength": ("Pa", ">0"), "steel_youngs_modulus": ("Pa", ">0"),
     "steel_shear_modulus": ("Pa", ">0"), "steel_density": ("kg/m^3", ">0"),
     "arm_viscosity": ("Pa s", ">=0"), "slider_mass": ("kg", ">0"),
     "slider_length": ("m", ">0"), "slider_radius": ("m", ">0"),
@@ -445,8 +446,8 @@ def _chain_section(c: _Checker, data: dict, is_builtin: bool) -> Optional[ChainS
 
 def _flexible(c: _Checker, e: dict, path: str, is_builtin: bool) -> Optional[FlexibleSpec]:
     c.keys(e, ("link", "section", "youngs_modulus", "shear_modulus", "density", "segments",
-               "bending_viscosity", "torsion_viscosity", "axis", "length", "section_y_axis"),
-           path)
+               "bending_viscosity", "torsion_viscosity", "axis", "length", "section_y_axis",
+               "yield_strength"), path)
     if is_builtin:
         c.add(path, "a builtin model sets its flexible links itself (crane: [model.crane] "
               "n_rfe); [[flexible]] is for urdf models")
@@ -462,6 +463,7 @@ def _flexible(c: _Checker, e: dict, path: str, is_builtin: bool) -> Optional[Fle
     axis = c.vector(e, "axis", path, 3, "link frame", required=False, nonzero=True)
     length = c.number(e, "length", path, "m", required=False, rule=">0")
     y_axis = c.vector(e, "section_y_axis", path, 3, "link frame", required=False, nonzero=True)
+    yield_strength = c.number(e, "yield_strength", path, "Pa", required=False, rule=">0")
     if axis is not None and y_axis is not None:
         a, y = np.array(axis), np.array(y_axis)
         if np.linalg.norm(np.cross(a, y)) <= 1e-9 * np.linalg.norm(a) * np.linalg.norm(y):
@@ -470,7 +472,8 @@ def _flexible(c: _Checker, e: dict, path: str, is_builtin: bool) -> Optional[Fle
     if len(c.problems) > n0:
         return None
     return FlexibleSpec(path, link, section, vals["youngs_modulus"], vals["shear_modulus"],
-                        vals["density"], segments, eta_e, eta_g, axis, length, y_axis)
+                        vals["density"], segments, eta_e, eta_g, axis, length, y_axis,
+                        yield_strength)
 
 
 def _section(c: _Checker, e: dict, path: str) -> Optional[SectionSpec]:

@@ -94,6 +94,7 @@ class FlexibleSpec:
     bending_viscosity, torsion_viscosity : Pa s (Kelvin-Voigt; torsion None: eta_E G / E)
     axis (3,), section_y_axis (3,) : in the link frame (None: from the geometry)
     length : m (None: from the geometry)
+    yield_strength : Pa, optional; enables the elasticity warning of gpme_core.elastic_loads
     """
 
     key: str
@@ -108,6 +109,7 @@ class FlexibleSpec:
     axis: Optional[tuple] = None
     length: Optional[float] = None
     section_y_axis: Optional[tuple] = None
+    yield_strength: Optional[float] = None
 
 
 @dataclass(frozen=True)
