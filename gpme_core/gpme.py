@@ -83,8 +83,9 @@ class ProgrammedMotion:
     model      : gpme_core.model.Model
     constraints: sequence of constraint specs (gpme_core.constraints)
     dependent  : names of the m dependent coordinates, or None to choose them by pivoting
-                 on the constraint Jacobian (call :meth:`choose_dependent` with a state,
-                 done automatically by gpme_core.integrate.simulate)
+                 on the constraint Jacobian (:meth:`choose_dependent` with a state;
+                 gpme_core.integrate.simulate chooses them for its run without setting
+                 them here)
     baumgarte  : (alpha, beta) in 1/s for Phi_ddot + 2 alpha Phi_dot + beta^2 Phi = 0
     damping_form: "lagrange" (default, what Lagrange's equations give) or "paper-eq7"
                  (adds the paper's sum_j q_dot_j dQ_j/dq_dot_i term literally, which counts
