@@ -25,6 +25,9 @@ METRICS = {
     "psi3_dev_peak_rad": ("rad", "max over t of |psi3 flexible - psi3 rigid|: how differently "
                           "the psi3 drive must move to make the flexible arm follow", True),
     "z4_dev_peak_m": ("m", "max over t of |z4 flexible - z4 rigid|, the same for z4", True),
+    "stress_peak_Pa": ("Pa", "max over t and over the arm's sdes of the bending stress from "
+                       "the sde moments (gpme_core.elastic_loads); elastic below yield / 1.5",
+                       True),
     "vib_freq_hz": ("Hz", "frequency of the largest peak above min_frequency_hz of the summed "
                     "power spectra of q_f after the transient", False),
     "drive_psi3_peak_Nm": ("N m", "max over t of |F_r[psi3]| in the flexible run: peak torque "

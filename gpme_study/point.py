@@ -14,6 +14,7 @@ import numpy as np
 
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.errors import ConstraintError, ModelError, SimulationError
+from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate, suggest_rk4_step
 
 from . import metrics as mx
@@ -135,6 +136,7 @@ def _history_metrics(flex_sys, flex, rigid, settings, n_rfe):
         return out
     cols = mx.flexible_columns(flex_sys.model)
     out.update(mx.flexible_coordinate_metrics(flex, cols))
+    out["stress_peak_Pa"] = max(p.bending_stress for p in elastic_peaks(flex_sys.model, flex))
     fs = 1.0 / float(np.median(np.diff(flex.t.to_numpy())))
     dr = mx.end_effector_deviation(flex, rigid)
     out.update(mx.dependent_deviation(flex, rigid))

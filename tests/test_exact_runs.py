@@ -116,7 +116,11 @@ def test_exact_run_agrees_with_gpme_within_its_integration_error(exact, case, en
             if column.endswith("_dot") else [column]
         state = float(np.abs(df[kind].to_numpy(float)).max())
         assert r["tol_abs"] < 1e-6 * max(state, r["scale"]), (column, r["tol_abs"], state)
-        assert r["tol_abs"] < 1e-3 * r["scale"], (column, r["tol_abs"], r["scale"])
+        if r["scale"] > 1e-6 * state:
+            # a column below 1e-6 of its kind (e.g. a torsion angle of 1e-11 rad beside
+            # psi3 ~ 1 rad) sits near the round-off cross-talk of the whole state, which
+            # sets its floor; the line above decides for it
+            assert r["tol_abs"] < 1e-3 * r["scale"], (column, r["tol_abs"], r["scale"])
     assert rows[-1]["status"] in ("pass", "info")
 
 

@@ -38,7 +38,9 @@ def test_run_directory_and_latest(report):
     back = pd.read_csv(run_dir / "gpme.csv")
     assert set(back["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
                                      "energy balance",
-                                     "smallest singular value of the constraint Jacobian"}
+                                     "smallest singular value of the constraint Jacobian",
+                                     "peak bending angle (arm)", "peak torsion angle (arm)",
+                                     "peak bending stress (arm)"}
 
 
 def test_interrupted_run_leaves_previous_report_and_latest(report, monkeypatch):
