@@ -8,7 +8,8 @@
 One cosmic-ray session (sqlite) per module under OUT (default mutation/out); one worker
 process (cosmic-ray's local distributor runs the mutants one after another); run it with
 ``nice -n 10``.  Modules other than fast.py are tested with GPME_NO_JIT=1 (the numpy
-reference path); fast.py with numba on (its mutants are recompiled for every run).
+reference path); fast.py and the ``if fast.ENABLED:`` dispatch blocks with numba on (the
+kernels are recompiled for every fast.py mutant); see mutation/killsuite.py.
 """
 import argparse
 import json
@@ -67,10 +68,9 @@ def kill_tests(module, with_new=True):
 
 
 def test_command(module, with_new=True):
-    env = "" if module == "fast" else "GPME_NO_JIT=1 "
-    desel = " ".join(f"--deselect {s}" for s in SLOW)
-    return (f"env {env}PYTHONPATH={ROOT} {PY} -m pytest -x -q --no-header -p no:cacheprovider "
-            f"{' '.join(kill_tests(module, with_new))} {desel}")
+    # mutation/killsuite.py picks the computation path from where the mutant sits
+    return (f"env PYTHONPATH={ROOT} {PY} -m mutation.killsuite {module}"
+            + ("" if with_new else " --baseline"))
 
 
 def write_config(out, module, with_new=True):
