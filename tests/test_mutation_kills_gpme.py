@@ -143,6 +143,10 @@ def test_unreachable_and_out_of_limit_targets_are_reported():
     far = ProgrammedMotion(table(), [EllipseConstraint(0.5, 0.3, name="E1")], dependent=["y"])
     with pytest.raises(ConstraintError):
         far.consistent_state(0.0, [0.9, 0.1], [0.0, 0.0])        # |x_E| > a: no solution
+    # x_E = 0.6 = 1.2 a: Phi >= 1.44 - 1 = 0.44 whatever y; Newton cannot reach Phi = 0 and
+    # the residual (< 1) must still be reported
+    with pytest.raises(ConstraintError, match="Newton"):
+        far.consistent_state(0.0, [0.5, 0.1], [0.0, 0.0])
 
 
 def test_singular_partition_and_dependent_constraints_raise():
@@ -157,6 +161,15 @@ def test_singular_partition_and_dependent_constraints_raise():
                                       CoordinateProgramme(F, axis=0, name="Q")])
     with pytest.raises(ConstraintError, match="rank"):
         twin.choose_dependent(0.0, np.zeros(2))
+    # the rank test is relative to the largest pivot: a regular Jacobian scaled by 0.01 is
+    # fine, one with pivots 141 and ~7e-10 (ratio 5e-12 < 1e-10) is rank deficient
+    small = ProgrammedMotion(table(), [SympyPointConstraint("0.01*x - 0.001", name="A"),
+                                       SympyPointConstraint("0.01*y", name="B")])
+    assert sorted(small.choose_dependent(0.0, np.zeros(2))) == ["x", "y"]
+    near = ProgrammedMotion(table(), [SympyPointConstraint("100*x", name="A"),
+                                      SympyPointConstraint("100*x + 1e-9*y", name="B")])
+    with pytest.raises(ConstraintError, match="rank"):
+        near.choose_dependent(0.0, np.zeros(2))
     with pytest.raises(ModelError, match="dependent coordinates not chosen"):
         twin.solve(0.0, np.zeros(2), np.zeros(2))
     for names in (["x", "x"], ["x"], ["x", "y", "y"]):

@@ -65,6 +65,7 @@ def test_box_and_cylinder_moments_by_hand():
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0, axis=1, inner_radius=0.5).inertia_array),
                                [7.75, 7.5, 7.75], rtol=RT)
     assert cylinder(12.0, 1.0, 2.0, com=(0, 0, 1)).com == (0.0, 0.0, 1.0)
+    assert cylinder(12.0, 1.0, 2.0).com == (0.0, 0.0, 0.0)          # default: centred
 
 
 def test_validity_checks_at_their_boundaries():
@@ -84,7 +85,9 @@ def test_validity_checks_at_their_boundaries():
            "finite (3, 3)": RigidBodyInertia(1.0, (0, 0, 0), np.diag([np.nan, 1, 1])),
            "symmetric": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]),
            "negative principal": RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.01, 1.0, 1.0])),
-           "triangle": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.02]))}
+           "triangle": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.02])),
+           # smallest + middle < largest with all three different: 0.5 + 1.0 < 1.6
+           "triangle ": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.6, 0.5, 1.0]))}
     for msg, body in bad.items():
         p = body.problems("b")
         assert len(p) >= 1 and msg.strip() in " ".join(p), (msg, p)

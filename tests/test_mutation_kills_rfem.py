@@ -223,4 +223,5 @@ def test_beam_problems_list_every_bad_value():
     assert "proper rotation" in beam_frame_problems("f", sheared)[0]
     last = np.eye(4)
     last[3, 0] = 1.0
-    assert len(beam_frame_problems("f", last)) == 1 and "last row" in beam_frame_problems("f", last)[0]
+    msg = beam_frame_problems("f", last)
+    assert len(msg) == 1 and "last row" in msg[0] and "[1.0, 0.0, 0.0, 1.0]" in msg[0]
