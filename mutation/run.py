@@ -112,25 +112,62 @@ def delete_jobs(db, job_ids):
     con.close()
 
 
-def init(out, modules, sample, seed, with_new):
+def clean_population(tmp):
+    """Every mutant of every physics module, made from gpme_core as committed (git HEAD,
+    exported to ``tmp``: independent of a mutant that may be applied in the work tree)."""
+    archive = subprocess.run(["git", "archive", "HEAD", "gpme_core"], cwd=ROOT, check=True,
+                             capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tmp)], input=archive, check=True)
+    dbs = {}
+    for m in MODULES:
+        db = tmp / f"{m}.sqlite"
+        cfg = write_config(tmp, m)
+        subprocess.run([str(Path(PY).parent / "cosmic-ray"), "init", str(cfg), str(db)],
+                       cwd=tmp, check=True)
+        delete_jobs(db, [r["job_id"] for r in specs(db) if EXCLUDED_OPERATORS.search(r["operator_name"])])
+        dbs[m] = db
+    return dbs
+
+
+def copy_rows(src, dst, job_ids):
+    con = sqlite3.connect(dst)
+    con.execute("attach database ? as src", (str(src),))
+    for j in job_ids:
+        con.execute("insert into work_items select * from src.work_items where job_id = ?", (j,))
+        con.execute("insert into mutation_specs select * from src.mutation_specs where job_id = ?", (j,))
+    con.commit()
+    con.close()
+
+
+def init(out, modules, sample, seed, with_new, extend=False):
+    """Sessions for ``modules`` holding the seeded sample (drawn from the population of ALL
+    physics modules, so it does not depend on --modules; random.sample's first k draws are
+    the sample of size k).  extend: add the missing sampled mutants to existing sessions,
+    keeping their results."""
+    import shutil
+    import tempfile
     out.mkdir(parents=True, exist_ok=True)
-    population = []
-    for m in modules:
-        db = out / f"{m}.sqlite"
-        if db.exists():
-            db.unlink()
-        cr("init", str(write_config(out, m, with_new)), str(db))
-        rows = specs(db)
-        delete_jobs(db, [r["job_id"] for r in rows if EXCLUDED_OPERATORS.search(r["operator_name"])])
-        population += [(m, r) for r in specs(db)]
-    population.sort(key=lambda mr: spec_key(mr[1]))
-    chosen = population
-    if sample:
-        chosen = random.Random(seed).sample(population, min(sample, len(population)))
-    keep = {r["job_id"] for _, r in chosen}
-    for m in modules:
-        db = out / f"{m}.sqlite"
-        delete_jobs(db, [r["job_id"] for r in specs(db) if r["job_id"] not in keep])
+    tmp = Path(tempfile.mkdtemp(prefix="gpme_mut_"))
+    try:
+        dbs = clean_population(tmp)
+        population = sorted(((m, r) for m in MODULES for r in specs(dbs[m])),
+                            key=lambda mr: spec_key(mr[1]))
+        chosen = population
+        if sample:
+            chosen = random.Random(seed).sample(population, min(sample, len(population)))
+        keys = {spec_key(r) for _, r in chosen}
+        for m in modules:
+            db = out / f"{m}.sqlite"
+            write_config(out, m, with_new)
+            if extend and db.exists():
+                have = {spec_key(r) for r in specs(db)}
+                copy_rows(dbs[m], db, [r["job_id"] for r in specs(dbs[m])
+                                       if spec_key(r) in keys and spec_key(r) not in have])
+            else:
+                shutil.copy(dbs[m], db)
+                delete_jobs(db, [r["job_id"] for r in specs(db) if spec_key(r) not in keys])
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     meta = {"seed": seed, "sample": sample, "population": len(population),
             "population_by_module": dict(Counter(m for m, _ in population)),
             "chosen": len(chosen), "chosen_by_module": dict(Counter(m for m, _ in chosen)),
@@ -201,6 +238,109 @@ def report(out, modules):
     print(f"{len(surv)} survivors listed in {out / 'survivors.txt'}")
 
 
+def _key_text(r):
+    return f"{r['module_path']}:{r['start_pos_row']}:{r['start_pos_col']} {r['operator_name'].split('/')[-1]} #{r['occurrence']}"
+
+
+def _change(r):
+    lines = [ln[1:].strip() for ln in (r["diff"] or "").splitlines()
+             if ln.startswith(("+", "-")) and not ln.startswith(("+++", "---"))]
+    old = [ln for ln in lines[:len(lines) // 2]]
+    new = [ln for ln in lines[len(lines) // 2:]]
+    return " / ".join(old), " / ".join(new)
+
+
+def _killer(output):
+    m = re.search(r"FAILED (\S+)", output or "")
+    if m:
+        return m.group(1).split(" ")[0]
+    m = re.search(r"ERROR (\S+)", output or "")
+    return ("error in " + m.group(1)) if m else "test run failed"
+
+
+def table(before, after, modules):
+    """Markdown rows for every mutant that survived the baseline kill suite: its status
+    after the new tests (the killing test from the pytest output) or, for survivors, the
+    reason recorded in mutation/equivalent.json."""
+    verdicts = json.loads((ROOT / "mutation" / "equivalent.json").read_text())
+    after_rows = {spec_key(r): r for r in results(after, modules)}
+    lines = ["| # | mutant (file:line:col operator #occurrence) | original -> mutated | after the new tests |",
+             "|---|---|---|---|"]
+    counts = Counter()
+    surv = sorted((r for r in results(before, modules) if (r["test_outcome"] or "").lower() == "survived"),
+                  key=spec_key)
+    for k, r in enumerate(surv, 1):
+        a = after_rows.get(spec_key(r), {})
+        old, new = _change(r)
+        outcome = (a.get("test_outcome") or "pending").lower()
+        key = _key_text(r)
+        if (a.get("worker_outcome") or "").lower() == "timeout":
+            verdict = "killed (timeout)"
+            counts["killed"] += 1
+        elif outcome == "killed":
+            cmd = "GPME_NO_JIT=1" if "GPME_NO_JIT" not in (a.get("output") or "") else ""
+            verdict = f"killed by `{_killer(a.get('output'))}`"
+            counts["killed"] += 1
+        elif key in verdicts:
+            verdict = "**equivalent**: " + verdicts[key]
+            counts["equivalent"] += 1
+        else:
+            verdict = f"**survives** ({outcome})"
+            counts["survived"] += 1
+        esc = lambda t: t.replace("|", "\\|").replace("`", "'")
+        lines.append(f"| {k} | `{key}` | `{esc(old)}` -> `{esc(new)}` | {verdict} |")
+    return "\n".join(lines), counts
+
+
+def wilson(k, n, z=1.96):
+    """95 % Wilson score interval of a proportion k / n."""
+    if n == 0:
+        return (float("nan"), float("nan"))
+    p = k / n
+    c = (p + z * z / (2 * n)) / (1 + z * z / n)
+    h = z * (p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5 / (1 + z * z / n)
+    return c - h, c + h
+
+
+def scores(before, after, modules):
+    """Markdown table: per module, mutants run, killed before (timeouts included),
+    equivalent, killed after, and the scores killed / (total - equivalent)."""
+    verdicts = json.loads((ROOT / "mutation" / "equivalent.json").read_text())
+    after_rows = {spec_key(r): r for r in results(after, modules)}
+
+    def dead(r):
+        return (r.get("test_outcome") or "").lower() == "killed" or \
+            (r.get("worker_outcome") or "").lower() == "timeout"
+    lines = ["| module | mutants | killed before | timeouts | survived before | equivalent | killed after | "
+             "score before | score after |", "|---|---|---|---|---|---|---|---|---|"]
+    tot = Counter()
+    for m in list(modules) + ["all"]:
+        if m == "all":
+            c = tot
+        else:
+            c = Counter()
+            for r in results(before, [m]):
+                a = after_rows.get(spec_key(r), r)
+                c["n"] += 1
+                c["kb"] += dead(r)
+                c["to"] += (r.get("worker_outcome") or "").lower() == "timeout"
+                eq = (not dead(r)) and (not dead(a)) and _key_text(r) in verdicts
+                c["eq"] += eq
+                c["ka"] += dead(r) or dead(a)
+                c["pending"] += r.get("test_outcome") is None and r.get("worker_outcome") is None
+            tot += c
+        if not c["n"]:
+            continue
+        nn = c["n"] - c["eq"]
+        lo_b, hi_b = wilson(c["kb"], nn)
+        lo_a, hi_a = wilson(c["ka"], nn)
+        lines.append(f"| {m} | {c['n']} | {c['kb']} | {c['to']} | {c['n'] - c['kb']} | {c['eq']} | {c['ka']} | "
+                     f"{100 * c['kb'] / nn:.1f} % ({100 * lo_b:.0f}-{100 * hi_b:.0f}) | "
+                     f"{100 * c['ka'] / nn:.1f} % ({100 * lo_a:.0f}-{100 * hi_a:.0f}) |"
+                     + (f" {c['pending']} pending" if c["pending"] else ""))
+    return "\n".join(lines)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="mutation/out")
@@ -212,15 +352,26 @@ def main(argv=None):
                    help="kill suite without tests/test_mutation_kills_*.py (the 'before' score)")
     p.add_argument("--rerun-survivors", action="store_true")
     p.add_argument("--report", action="store_true", help="only summarise --out")
+    p.add_argument("--table", metavar="BEFORE",
+                   help="markdown table of BEFORE's survivors with their status in --out")
     p.add_argument("--init-only", action="store_true")
+    p.add_argument("--extend", action="store_true",
+                   help="add the sampled mutants missing from existing sessions (keeps results)")
     a = p.parse_args(argv)
     out = (ROOT / a.out).resolve()
     if a.report:
         return report(out, a.modules)
+    if a.table:
+        text, counts = table((ROOT / a.table).resolve(), out, a.modules)
+        print(scores((ROOT / a.table).resolve(), out, a.modules))
+        print()
+        print(text)
+        print(dict(counts), file=sys.stderr)
+        return None
     if a.rerun_survivors:
         rerun_survivors(out, a.modules)
         return report(out, a.modules)
-    init(out, a.modules, 0 if a.all else a.sample, a.seed, not a.baseline_suite)
+    init(out, a.modules, 0 if a.all else a.sample, a.seed, not a.baseline_suite, a.extend)
     if a.init_only:
         return None
     exec_all(out, a.modules)
