@@ -132,6 +132,9 @@ def test_rk4_stability_constants():
     assert rk4_stability_step(5j) == pytest.approx(2 * np.sqrt(2) / 5, rel=1e-12)
     assert rk4_stability_step(0.0) == np.inf
     assert rk4_stability_step(3.0) == np.inf
+    # a slowly growing oscillation (Re lambda > 0): the exact solution grows, so there is no
+    # stability limit to respect, although RK4's region reaches into Re z > 0 near z = i
+    assert rk4_stability_step(0.001 + 1j) == np.inf
 
 
 def test_suggested_step_of_undamped_and_overdamped_sliders():
@@ -163,6 +166,12 @@ def test_solve_ivp_path_matches_the_exact_oscillator(method):
     np.testing.assert_allclose(df["x"], 0.1 * np.cos(2 * t) + 0.25 * np.sin(2 * t), atol=1e-6)
     np.testing.assert_allclose(df["x_dot"], -0.2 * np.sin(2 * t) + 0.5 * np.cos(2 * t), atol=1e-6)
     assert df.attrs["dt"] is None and df.attrs["rtol"] == 1e-9
+
+
+def test_default_output_step_is_one_millisecond():
+    """simulate(dt = 1e-3) without output_dt records every 1e-3 s: 5 rows over 4 ms."""
+    df = simulate(table(False), 0.004, [0.0, 0.0], [0.1, 0.0], dt=1e-3)
+    np.testing.assert_allclose(df["t"], [0.0, 0.001, 0.002, 0.003, 0.004], atol=1e-15)
 
 
 def test_on_manifold_start_and_input_checks():
