@@ -66,6 +66,7 @@ def test_box_and_cylinder_moments_by_hand():
                                [7.75, 7.5, 7.75], rtol=RT)
     assert cylinder(12.0, 1.0, 2.0, com=(0, 0, 1)).com == (0.0, 0.0, 1.0)
     assert cylinder(12.0, 1.0, 2.0).com == (0.0, 0.0, 0.0)          # default: centred
+    assert cuboid(12.0, (1, 2, 3)).com == (0.0, 0.0, 0.0)
 
 
 def test_validity_checks_at_their_boundaries():
