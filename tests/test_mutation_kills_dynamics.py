@@ -55,7 +55,10 @@ def closed_form(q, qd):
     return m, h, g, 0.5 * qd @ m @ qd, v
 
 
-STATES = [((0.3, -0.7), (1.1, -0.4)), ((-1.2, 2.0), (-0.3, 0.9)), ((2.5, 0.4), (0.0, 1.7))]
+# joint velocities 0, +1 and -1 exactly among them (the compiled point kernel branches on
+# q_dot_l != 0)
+STATES = [((0.3, -0.7), (1.1, -0.4)), ((-1.2, 2.0), (-0.3, 0.9)), ((2.5, 0.4), (0.0, 1.7)),
+          ((0.6, -1.9), (1.0, -1.0))]
 
 
 @pytest.mark.parametrize("q, qd", STATES)
