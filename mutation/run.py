@@ -319,6 +319,9 @@ def scores(before, after, modules):
     lines = ["| module | mutants | killed before | timeouts | survived before | equivalent | killed after | "
              "score before | score after |", "|---|---|---|---|---|---|---|---|---|"]
     tot = Counter()
+    meta = json.loads((before / "meta.json").read_text())
+    weights = meta["population_by_module"]
+    strata = []
     for m in list(modules) + ["all"]:
         if m == "all":
             c = tot
@@ -337,12 +340,21 @@ def scores(before, after, modules):
         if not c["n"]:
             continue
         nn = c["n"] - c["eq"]
+        if m != "all":
+            strata.append((weights[m], c["kb"] / nn, c["ka"] / nn, nn))
         lo_b, hi_b = wilson(c["kb"], nn)
         lo_a, hi_a = wilson(c["ka"], nn)
         lines.append(f"| {m} | {c['n']} | {c['kb']} | {c['to']} | {c['n'] - c['kb']} | {c['eq']} | {c['ka']} | "
                      f"{100 * c['kb'] / nn:.1f} % ({100 * lo_b:.0f}-{100 * hi_b:.0f}) | "
                      f"{100 * c['ka'] / nn:.1f} % ({100 * lo_a:.0f}-{100 * hi_a:.0f}) |"
                      + (f" {c['pending']} pending" if c["pending"] else ""))
+    w_all = sum(w for w, *_ in strata)
+    cells = []
+    for k in (1, 2):
+        est = sum(w * st[k - 1] for w, *st in strata) / w_all
+        var = sum((w / w_all) ** 2 * st[k - 1] * (1 - st[k - 1]) / st[2] for w, *st in strata)
+        cells.append(f"{100 * est:.1f} % (+-{196 * var ** 0.5:.0f})")
+    lines.append(f"| all, weighted by population | {meta['population']} | | | | | | {cells[0]} | {cells[1]} |")
     return "\n".join(lines)
 
 
