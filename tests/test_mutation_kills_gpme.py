@@ -115,11 +115,11 @@ def test_unconstrained_system_solves_m_q_ddot_equal_h_plus_q():
 
 
 def test_consistent_state_on_a_time_dependent_and_a_curved_constraint():
-    """x + 2 y = 0.1 t^2 at t = 0.5: y = (0.025 - x_E - 0.4)/2 ... solved by hand with
-    x_E = x + 0.1, y_E = y + 0.2: y = (0.025 - (x + 0.1))/2 - 0.2, and Phi_dot = 0 gives
-    y_dot = (0.2 t - x_dot)/2 = (0.1 - x_dot)/2.  An ellipse (x_E/0.5)^2 + (y_E/0.3)^2 = 1
-    needs Newton: y_E = 0.3 sqrt(1 - (x_E/0.5)^2) on the branch of the start, and
-    y_dot = -(0.3/0.5)^2 x_E x_dot / y_E."""
+    """Phi = x_E + 2 y_E - 0.1 t^2 with x_E = x + 0.1, y_E = y + 0.2, at t = 0.5 and
+    y dependent: y = (0.025 - (x + 0.1))/2 - 0.2; Phi_dot = x_dot + 2 y_dot - 0.2 t = 0 gives
+    y_dot = (0.1 - x_dot)/2 (the Phi_t term matters).  An ellipse (x_E/0.5)^2 + (y_E/0.3)^2
+    = 1 needs Newton: y_E = 0.3 sqrt(1 - (x_E/0.5)^2) on the branch of the start, and
+    y_dot = -(0.3/0.5)^2 x_E x_dot / y_E.  x and x_dot (independent) are kept."""
     c = SympyPointConstraint(sp.Symbol("x") + 2 * sp.Symbol("y") - 0.1 * sp.Symbol("t") ** 2, name="C")
     s = ProgrammedMotion(table(), [c], dependent=["y"])
     q, qd = s.consistent_state(0.5, [0.2, 3.0], [0.3, 9.0])
