@@ -132,6 +132,10 @@ def test_consistent_state_on_a_time_dependent_and_a_curved_constraint():
     ye = 0.3 * np.sqrt(1 - (xe / 0.5) ** 2)
     assert q[1] + 0.2 == pytest.approx(ye, abs=1e-10)     # Newton stops at |Phi| < 1e-12
     assert qd[1] == pytest.approx(-(0.3 / 0.5) ** 2 * xe * 0.4 / ye, abs=1e-9)
+    # one Newton step from y_E = 0.3 (solution 0.24) reaches y_E = 0.246, |Phi| = 0.032 (quadratic
+    # convergence from an error of 0.06): far above 1e-9, so the start must be refused
+    with pytest.raises(ConstraintError, match="after 1 Newton steps"):
+        e.consistent_state(0.0, [0.2, 0.1], [0.4, 0.0], max_iter=1)
 
 
 def test_unreachable_and_out_of_limit_targets_are_reported():
@@ -191,4 +195,5 @@ def test_reciprocal_condition_number_in_the_1_norm():
     b = np.array([[1.0, 2.0], [3.0, 4.0]])
     assert _rcond(b, np.linalg.inv(b)) == pytest.approx(1 / 21, rel=1e-14)
     assert _rcond(np.zeros((2, 2)), np.zeros((2, 2))) == 0.0
+    assert _rcond(np.zeros((2, 2)), np.eye(2)) == 0.0    # a zero matrix, whatever "inverse"
     assert _rcond(a, np.full((2, 2), np.inf)) == 0.0
