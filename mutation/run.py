@@ -213,7 +213,7 @@ def results(out, modules):
         con = sqlite3.connect(db)
         con.row_factory = sqlite3.Row
         rows += [dict(r, module=m) for r in con.execute(
-            "select s.*, r.worker_outcome, r.test_outcome, r.diff from mutation_specs s "
+            "select s.*, r.worker_outcome, r.test_outcome, r.diff, r.output from mutation_specs s "
             "left join work_results r on s.job_id = r.job_id")]
         con.close()
     return rows
