@@ -55,15 +55,19 @@ def test_massless_pseudo_inertia_returns_the_rotational_inertia():
 
 def test_box_and_cylinder_moments_by_hand():
     """Box m = 12 kg, 1 x 2 x 3 m: I = m/12 (b^2 + c^2, ...) = (13, 10, 5) kg m^2.  Solid
-    cylinder m = 12, r = 1, L = 2: axial m r^2/2 = 6, transverse m (3 r^2 + L^2)/12 = 7.
-    Tube r_o = 1, r_i = 0.5: axial m (r_o^2 + r_i^2)/2 = 7.5, transverse
-    m (3 (r_o^2 + r_i^2) + L^2)/12 = 7.75."""
+    cylinder m = 12, r = 1, L = 2: axial m r^2/2 = 6, transverse m (3 r^2 + L^2)/12 = 7;
+    r = 0.5: axial 1.5, transverse 4.75.  Tube r_o = 1, r_i = 0.5: axial
+    m (r_o^2 + r_i^2)/2 = 7.5, transverse m (3 (r_o^2 + r_i^2) + L^2)/12 = 7.75; r_o = 0.5,
+    r_i = 0.25: axial 1.875, transverse 4.9375."""
     np.testing.assert_allclose(np.diag(cuboid(12.0, (1, 2, 3), com=(1, 2, 3)).inertia_array), [13, 10, 5], rtol=RT)
     assert cuboid(12.0, (1, 2, 3), com=(1, 2, 3)).com == (1.0, 2.0, 3.0)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0).inertia_array), [7, 7, 6], rtol=RT)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0, axis=0).inertia_array), [6, 7, 7], rtol=RT)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0, axis=1, inner_radius=0.5).inertia_array),
                                [7.75, 7.5, 7.75], rtol=RT)
+    np.testing.assert_allclose(np.diag(cylinder(12.0, 0.5, 2.0).inertia_array), [4.75, 4.75, 1.5], rtol=RT)
+    np.testing.assert_allclose(np.diag(cylinder(12.0, 0.5, 2.0, inner_radius=0.25).inertia_array),
+                               [4.9375, 4.9375, 1.875], rtol=RT)
     assert cylinder(12.0, 1.0, 2.0, com=(0, 0, 1)).com == (0.0, 0.0, 1.0)
     assert cylinder(12.0, 1.0, 2.0).com == (0.0, 0.0, 0.0)          # default: centred
     assert cuboid(12.0, (1, 2, 3)).com == (0.0, 0.0, 0.0)
@@ -71,13 +75,18 @@ def test_box_and_cylinder_moments_by_hand():
 
 def test_validity_checks_at_their_boundaries():
     """Accepted: zero mass with zero tensor, a thin plate I1 + I2 = I3 exactly, a thin rod
-    (one zero moment), a point mass with a -1e-35 moment (URDF round-off).  Rejected:
+    (one zero moment), a point mass with a -1e-35 moment (URDF round-off), negative moments
+    of 1e-13 of the largest (round-off of a rotated tensor; the tolerance is 1e-12 of it).
+    Rejected:
     negative or non-finite mass, non-finite or mis-shaped com/tensor, asymmetric tensor,
     a negative moment, the triangle inequality broken by 1 %."""
     ok = [RigidBodyInertia(0.0), RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.0])),
           RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.0, 1.0, 1.0])),
           RigidBodyInertia(1.0, (0, 0, 0), np.diag([-1e-35, 0.0, 0.0])),
-          RigidBodyInertia(1e6, (0, 0, 0), np.diag([-0.5e-6, 0.0, 0.0]))]   # below m * (1 um)^2
+          RigidBodyInertia(1e6, (0, 0, 0), np.diag([-0.5e-6, 0.0, 0.0])),   # below m * (1 um)^2
+          # round-off of a rotated tensor: a moment of -1e-13 relative to the largest one
+          RigidBodyInertia(0.0, (0, 0, 0), np.diag([-1e-13, 1.0, 1.0])),
+          RigidBodyInertia(1.0, (0, 0, 0), np.diag([-5e-10, 1e3, 1e3]))]
     for body in ok:
         assert body.problems("b") == [], body
     bad = {"mass must be": RigidBodyInertia(-1.0), "mass must be ": RigidBodyInertia(float("nan")),
@@ -85,6 +94,7 @@ def test_validity_checks_at_their_boundaries():
            "centre of mass ": RigidBodyInertia(1.0, (0, 0)),
            "finite (3, 3)": RigidBodyInertia(1.0, (0, 0, 0), np.diag([np.nan, 1, 1])),
            "symmetric": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]),
+           "symmetric ": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.15, 1, 0], [0, 0, 1]]),
            "negative principal": RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.01, 1.0, 1.0])),
            "triangle": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.02])),
            # smallest + middle < largest with all three different: 0.5 + 1.0 < 1.6
@@ -102,6 +112,8 @@ def test_check_pseudo_inertia_raises_on_unphysical_h():
     check_pseudo_inertia(cuboid(2.0, (0.1, 0.2, 0.3), com=(0.1, 0, 0)).pseudo_inertia())
     with pytest.raises(ModelError, match="shape"):
         check_pseudo_inertia(np.eye(3))
+    with pytest.raises(ModelError, match="shape"):
+        check_pseudo_inertia(np.eye(5))
     with pytest.raises(ModelError, match="triangle"):
         check_pseudo_inertia(pseudo_inertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.5])))
 
