@@ -1,6 +1,8 @@
 """Kill tests for gpme_core.inertia (docs/mutation.md): the pseudo-inertia H = int r r^T dm
 checked on clouds of point masses (where the integral is a finite sum), the box and
 cylinder formulas by hand, and the physical-validity checks at their boundaries."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -92,6 +94,7 @@ def test_validity_checks_at_their_boundaries():
     bad = {"mass must be": RigidBodyInertia(-1.0), "mass must be ": RigidBodyInertia(float("nan")),
            "centre of mass": RigidBodyInertia(1.0, (0, np.inf, 0)),
            "centre of mass ": RigidBodyInertia(1.0, (0, 0)),
+           " centre of mass ": RigidBodyInertia(1.0, (0, 0, 0, 0)),
            "finite (3, 3)": RigidBodyInertia(1.0, (0, 0, 0), np.diag([np.nan, 1, 1])),
            "symmetric": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]),
            "symmetric ": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.15, 1, 0], [0, 0, 1]]),
@@ -104,6 +107,16 @@ def test_validity_checks_at_their_boundaries():
         assert len(p) >= 1 and msg.strip() in " ".join(p), (msg, p)
     # a negative moment of a point mass just above the 1 um threshold is rejected
     assert RigidBodyInertia(1.0, (0, 0, 0), np.diag([-2e-12, 0, 0])).problems("b")
+
+
+def test_defaults_and_immutability():
+    """RigidBodyInertia(m) is a point mass at the body origin (com 0, tensor 0); the record
+    is frozen (a model's bodies must not change under it)."""
+    body = RigidBodyInertia(2.0)
+    assert body.com == (0.0, 0.0, 0.0)
+    np.testing.assert_array_equal(body.inertia_array, np.zeros((3, 3)))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        body.mass = 3.0
 
 
 def test_check_pseudo_inertia_raises_on_unphysical_h():
