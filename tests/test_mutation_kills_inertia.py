@@ -88,7 +88,9 @@ def test_validity_checks_at_their_boundaries():
           RigidBodyInertia(1e6, (0, 0, 0), np.diag([-0.5e-6, 0.0, 0.0])),   # below m * (1 um)^2
           # round-off of a rotated tensor: a moment of -1e-13 relative to the largest one
           RigidBodyInertia(0.0, (0, 0, 0), np.diag([-1e-13, 1.0, 1.0])),
-          RigidBodyInertia(1.0, (0, 0, 0), np.diag([-5e-10, 1e3, 1e3]))]
+          RigidBodyInertia(1.0, (0, 0, 0), np.diag([-5e-10, 1e3, 1e3])),
+          # symmetric to round-off only (off-diagonals differ by 1e-13 relative)
+          RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.1 * (1 + 1e-13), 1, 0], [0, 0, 1]])]
     for body in ok:
         assert body.problems("b") == [], body
     bad = {"mass must be": RigidBodyInertia(-1.0), "mass must be ": RigidBodyInertia(float("nan")),
