@@ -60,7 +60,7 @@ def test_box_and_cylinder_moments_by_hand():
     cylinder m = 12, r = 1, L = 2: axial m r^2/2 = 6, transverse m (3 r^2 + L^2)/12 = 7;
     r = 0.5: axial 1.5, transverse 4.75.  Tube r_o = 1, r_i = 0.5: axial
     m (r_o^2 + r_i^2)/2 = 7.5, transverse m (3 (r_o^2 + r_i^2) + L^2)/12 = 7.75; r_o = 0.5,
-    r_i = 0.25: axial 1.875, transverse 4.9375."""
+    r_i = 0.25: axial 1.875, transverse 4.9375; r = 0.5, L = 3: transverse 9.75."""
     np.testing.assert_allclose(np.diag(cuboid(12.0, (1, 2, 3), com=(1, 2, 3)).inertia_array), [13, 10, 5], rtol=RT)
     assert cuboid(12.0, (1, 2, 3), com=(1, 2, 3)).com == (1.0, 2.0, 3.0)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0).inertia_array), [7, 7, 6], rtol=RT)
@@ -68,6 +68,8 @@ def test_box_and_cylinder_moments_by_hand():
     np.testing.assert_allclose(np.diag(cylinder(12.0, 1.0, 2.0, axis=1, inner_radius=0.5).inertia_array),
                                [7.75, 7.5, 7.75], rtol=RT)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 0.5, 2.0).inertia_array), [4.75, 4.75, 1.5], rtol=RT)
+    # L = 3 (L^2 = 9, not 2 L or L + 2): transverse 12 (0.75 + 9) / 12 = 9.75
+    np.testing.assert_allclose(np.diag(cylinder(12.0, 0.5, 3.0).inertia_array), [9.75, 9.75, 1.5], rtol=RT)
     np.testing.assert_allclose(np.diag(cylinder(12.0, 0.5, 2.0, inner_radius=0.25).inertia_array),
                                [4.9375, 4.9375, 1.875], rtol=RT)
     assert cylinder(12.0, 1.0, 2.0, com=(0, 0, 1)).com == (0.0, 0.0, 1.0)
