@@ -101,6 +101,8 @@ def test_validity_checks_at_their_boundaries():
            " centre of mass ": RigidBodyInertia(1.0, (0, 0, 0, 0)),
            "finite (3, 3)": RigidBodyInertia(1.0, (0, 0, 0), np.diag([np.nan, 1, 1])),
            "finite (3, 3) ": RigidBodyInertia(1.0, (0, 0, 0), np.eye(2)),
+           " finite (3, 3)": RigidBodyInertia(1.0, (0, 0, 0), np.eye(4)),
+           " negative principal": RigidBodyInertia(0.0, (0, 0, 0), np.diag([-0.5, 1.0, 1.0])),
            "symmetric": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]),
            "symmetric ": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.15, 1, 0], [0, 0, 1]]),
            "negative principal": RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.01, 1.0, 1.0])),
