@@ -12,3 +12,7 @@ rm -rf mutation/out/after && cp -r mutation/out/baseline mutation/out/after
 nice -n 10 $PY -m mutation.run --out mutation/out/after --rerun-survivors
 $PY -m mutation.run --out mutation/out/after --table mutation/out/baseline > mutation/out/table.md
 echo "tables in mutation/out/table.md"
+# every mutant of inertia.py with the final kill suite (~20 min): ALL_INERTIA=1 sh mutation/run.sh
+if [ "${ALL_INERTIA:-0}" = 1 ]; then
+    nice -n 10 $PY -m mutation.run --all --modules inertia --out mutation/out/all_inertia
+fi
