@@ -153,6 +153,8 @@ def check_pseudo_inertia(h, label="H"):
     h = np.asarray(h, dtype=float)
     if h.shape != (4, 4):
         raise ModelError(f"{label}: expected shape (4, 4), got {h.shape}")
+    if not h[3, 3] >= 0.0:      # inertia_from_pseudo reads H[3, 3] <= 0 as massless
+        raise ModelError(f"{label}: mass H[3, 3] = {h[3, 3]!r} kg must be >= 0 (finite)")
     mass, com, i_c = inertia_from_pseudo(h)
     problems = RigidBodyInertia(mass, com, i_c).problems(label)
     if problems:

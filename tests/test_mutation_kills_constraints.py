@@ -12,6 +12,8 @@ from gpme_core.errors import ModelError
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.time_functions import QuinticRamp, Sine
 
+pytestmark = pytest.mark.both_computation_paths
+
 x, y, z, t = sp.symbols("x y z t")
 
 

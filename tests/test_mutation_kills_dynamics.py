@@ -12,6 +12,8 @@ from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, REVOLUTE, ChainBuilder
 from gpme_core.time_functions import Constant
 
+pytestmark = pytest.mark.both_computation_paths
+
 M1, M2, L1, C1, C2, G0 = 2.0, 1.5, 0.8, 0.3, 0.45, 9.81
 B1, B2 = (0.6, 0.1, 0.2), (0.9, 0.15, 0.05)         # box sizes (x, y, z) m
 K, QREF, D, TAU = (3.0, 5.0), (0.2, -0.1), (0.4, 0.7), (1.5, -0.25)

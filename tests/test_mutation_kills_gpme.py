@@ -14,6 +14,8 @@ from gpme_core.inertia import cuboid
 from gpme_core.model import PRISMATIC, ChainBuilder
 from gpme_core.time_functions import Sine
 
+pytestmark = pytest.mark.both_computation_paths
+
 MASS, KX, KY, DX, DY, REFX, REFY = 2.0, 3.0, 5.0, 0.4, 0.7, 0.1, -0.2
 EX = (0.1, 0.2, 0.0)                      # frame E offset on the carriage, m
 F = Sine(0.05, 0.2, 1.5, 0.3)             # programme of x_E (m)

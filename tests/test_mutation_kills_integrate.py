@@ -15,6 +15,8 @@ from gpme_core.integrate import rk4_stability_step, rk4_step_plan, simulate, sug
 from gpme_core.model import PRISMATIC, ChainBuilder
 from gpme_core.time_functions import Sine
 
+pytestmark = pytest.mark.both_computation_paths
+
 M, KX, KY, DX, DY = 2.0, 30.0, 50.0, 0.4, 0.7
 EX = (0.1, 0.2, 0.3)
 FORCE = Sine(0.0, 0.5, 1.5, 0.35)             # drive on y, N

@@ -11,6 +11,8 @@ from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import REVOLUTE, ChainBuilder
 from gpme_core.rfem import BeamProperties, BeamSection, beam_frame_problems
 
+pytestmark = pytest.mark.both_computation_paths
+
 # closed forms evaluated in floating point: agreement to a few ulp
 RT = 1e-12
 
