@@ -94,7 +94,7 @@ def elastic_rows(scenario, df, case):
     (gpme_core.elastic_loads): the run's distance from the limits of the model's validity.
     A row whose limit is exceeded has a reason starting with WARNING."""
     rows = []
-    for peak in elastic_peaks(scenario.model, df, getattr(scenario, "yield_strengths", None)):
+    for peak in elastic_peaks(scenario.model, df, scenario.yield_strengths):
         allowed = peak.allowed_stress
         items = (
             ("peak bending angle", peak.bending_angle, peak.bending_sde, peak.bending_time,

@@ -61,10 +61,17 @@ def build_source(spec: ModelFile) -> SourceModel:
     return _urdf_model(spec, src)
 
 
+def _crane_parameters(spec: ModelFile):
+    """CraneParameters of a builtin crane file: its [model.crane] overrides and gravity."""
+    from gpme_examples.crane import CraneParameters
+    return CraneParameters(**{**dict(spec.model.source.overrides),
+                              "gravity": tuple(spec.model.gravity)})
+
+
 def _crane_model(spec: ModelFile) -> SourceModel:
-    from gpme_examples.crane import CraneParameters, build_crane
+    from gpme_examples.crane import build_crane
     src = spec.model.source
-    params = CraneParameters(**{**dict(src.overrides), "gravity": tuple(spec.model.gravity)})
+    params = _crane_parameters(spec)
     try:
         model = build_crane(src.n_rfe, params, name=spec.model.name)
     except ModelError as exc:
@@ -270,11 +277,9 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
 
 def _yield_strengths(spec, model):
     """{flexible link name: Pa} from [[flexible]] yield_strength, or the crane's arm."""
-    src = spec.model.source
-    if isinstance(src, CraneSource):
-        from gpme_examples.crane import CraneParameters
-        params = CraneParameters(**{**dict(src.overrides), "gravity": tuple(spec.model.gravity)})
-        return {f.name: params.arm_yield_strength for f in model.flexible_links}
+    if isinstance(spec.model.source, CraneSource):
+        strength = _crane_parameters(spec).arm_yield_strength
+        return {f.name: strength for f in model.flexible_links}
     return {f.link: f.yield_strength for f in spec.flexible if f.yield_strength is not None}
 
 
