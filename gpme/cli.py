@@ -12,6 +12,32 @@ from pathlib import Path
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (or SIGHUP) received: raised in the main thread like Ctrl-C's
+    KeyboardInterrupt, so every ``finally`` and staging-directory cleanup runs; the command
+    then exits with 128 + the signal number (143 for SIGTERM)."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated(signum)
+
+
+def _install_signal_handlers():
+    """SIGTERM and SIGHUP end the command like Ctrl-C (main thread only; no-op elsewhere)."""
+    import signal
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            try:
+                signal.signal(sig, _raise_terminated)
+            except ValueError:      # not the main thread (e.g. called from a test worker)
+                pass
+
+
 def _error(msg):
     print(f"error: {msg}", file=sys.stderr)
     return EXIT_USAGE
@@ -201,10 +227,16 @@ def build_parser():
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    _install_signal_handlers()
     try:
         return args.func(args)
+    except Terminated as exc:
+        import signal
+        print(f"terminated ({signal.Signals(exc.signum).name}); finished files kept, "
+              "partial output removed", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        print("interrupted; finished files kept, partial output removed", file=sys.stderr)
         return 130
     except BrokenPipeError:          # output piped into a reader that stopped (| head)
         import os
