@@ -42,3 +42,8 @@ class SimulationError(GpmeError):
 class SectionWarning(UserWarning):
     """A beam's section constants are legal but suspicious (e.g. a circle's torsion constant
     J = I_y + I_z on a section with I_y != I_z); the message gives the values."""
+
+
+class UnstableStepError(SimulationError):
+    """A fixed step is above the stability limit of the model's stiffest mode (the message
+    names the mode, the limit and a stable step)."""

@@ -22,8 +22,11 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
-from .errors import ConstraintError, ModelError, SimulationError
+from .errors import ConstraintError, ModelError, SimulationError, UnstableStepError
+from .errors import GpmeError as GpmeErrorBase
 from .gpme import SWITCH_RCOND, partition_rcond
+from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
+                        unstable_step_message)
 
 log = logging.getLogger("gpme.integrate")
 
@@ -32,23 +35,10 @@ IMPLICIT_METHODS = ("Radau",)
 N_WORK = 3
 # |q| or |q_dot| above this means the run has blown up (SI units: m, rad, m/s, rad/s)
 DIVERGENCE_LIMIT = 1e6
-
-
-def _rk4_growth(z):
-    return abs(1 + z + z * z / 2 + z ** 3 / 6 + z ** 4 / 24)
-
-
-def rk4_stability_step(eigenvalue):
-    """Largest h with |R(h lambda)| <= 1 for classical RK4 along the ray of ``eigenvalue``
-    (inf for lambda = 0); R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24."""
-    lam = complex(eigenvalue)
-    if abs(lam) == 0.0 or (lam.real > 0 and _rk4_growth(1e-9 * lam / abs(lam)) > 1):
-        return np.inf
-    lo, hi = 0.0, 4.0 / abs(lam)          # |z| <= 2.9 inside the stability region
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _rk4_growth(mid * lam) <= 1.0 + 1e-12 else (lo, mid)
-    return lo
+# entries of the state named in a divergence message
+MESSAGE_ENTRIES = 6
+# a recorded history above this many bytes in memory is refused before the run
+MAX_HISTORY_BYTES = 4 * 2 ** 30
 
 
 def suggest_rk4_step(model, q, safety=0.5):
@@ -59,13 +49,7 @@ def suggest_rk4_step(model, q, safety=0.5):
     times the smallest RK4 stability step over them.  With Kelvin-Voigt RFEM dampers the
     limit can come from the overdamped high modes (real eigenvalues ~ -eta/E omega^2).
     """
-    from .dynamics import mass_matrix
-    n = model.n_coordinates
-    m_inv = np.linalg.inv(mass_matrix(model, q))
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -m_inv * model.stiffness[None, :]
-    a[n:, n:] = -m_inv * model.damping[None, :]
+    a = springs_jacobian(model, q)
     steps = [rk4_stability_step(lam) for lam in np.linalg.eigvals(a)]
     return safety * float(min(steps))
 
@@ -134,11 +118,13 @@ def _check_state(model, t, y, n, dt=None):
     if bad.any():
         names = [f"{model.coordinate_names[k % n]}{'' if k < n else '_dot'}"
                  for k in np.flatnonzero(bad)]
-        hint = f" with dt = {dt:g} s; try a smaller dt" if dt else ""
+        hint = f" with dt = {dt:g} s" if dt else ""
+        values = ", ".join(f"{name} = {v:.3g}" for name, v in
+                           zip(names[:MESSAGE_ENTRIES], y[np.flatnonzero(bad)]))
+        more = f" and {len(names) - MESSAGE_ENTRIES} more" if len(names) > MESSAGE_ENTRIES else ""
         raise SimulationError(
-            f"the run diverged at t = {t:.6g} s{hint}: {names} non-finite or above "
-            f"{DIVERGENCE_LIMIT:g} (q = {np.round(q, 6).tolist()}, "
-            f"q_dot = {np.round(q_dot, 6).tolist()})")
+            f"the run diverged at t = {t:.6g} s{hint}: {values}{more} (non-finite or above "
+            f"{DIVERGENCE_LIMIT:g} in SI units)")
     outside = model.limit_violations(q)
     if outside:
         raise ConstraintError(
@@ -158,43 +144,90 @@ def rk4_step_plan(t_end, dt, output_dt):
     return step, max(1, int(round(output_dt / step)))
 
 
-def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress):
+def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None):
     n_steps = int(round(t_end / dt))
     ts, ys = [0.0], [y0.copy()]
     y = y0.copy()
-    bar = _progress(progress, n_steps)
-    for k in range(n_steps):
-        t = k * dt
-        k1 = rhs(t, y)
-        k2 = rhs(t + 0.5 * dt, y + 0.5 * dt * k1)
-        k3 = rhs(t + 0.5 * dt, y + 0.5 * dt * k2)
-        k4 = rhs(t + dt, y + dt * k3)
-        y = y + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        _check_state(model, t + dt, y, n, dt)
-        if (k + 1) % record_every == 0 or k + 1 == n_steps:
-            ts.append((k + 1) * dt)
-            ys.append(y.copy())
-        if bar is not None and k % 1000 == 0:
-            bar.update(min(1000, n_steps - k))
-    if bar is not None:
+    bar = Progress(progress, n_steps, t_end, "RK4")
+    try:
+        for k in range(n_steps):
+            t = k * dt
+            k1 = rhs(t, y)
+            k2 = rhs(t + 0.5 * dt, y + 0.5 * dt * k1)
+            k3 = rhs(t + 0.5 * dt, y + 0.5 * dt * k2)
+            k4 = rhs(t + dt, y + dt * k3)
+            y = y + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            _check_state(model, t + dt, y, n, dt)
+            if (k + 1) % record_every == 0 or k + 1 == n_steps:
+                ts.append((k + 1) * dt)
+                ys.append(y.copy())
+            bar.update(k + 1)
+    except (SimulationError, ConstraintError) as exc:
+        if partition is not None:
+            _raise_if_unstable(partition, dt, ts[-1], ys[-1], n, exc)
+        raise
+    finally:
         bar.close()
     return np.array(ts), np.array(ys)
 
 
-def _progress(progress, total):
-    if not progress:
-        return None
-    from tqdm import tqdm
-    return tqdm(total=total, unit="step", desc="RK4", leave=False, mininterval=1.0)
+def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
+    """Re-raise a failed RK4 run as UnstableStepError when dt is above the stability limit at
+    the last recorded state before the failure (else leave the original error)."""
+    try:
+        limit, mode = rk4_limit(partition.system, t_good, y_good[:n], y_good[n:2 * n])
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError, GpmeErrorBase):
+        return
+    if dt > limit:
+        raise UnstableStepError(
+            unstable_step_message(dt, limit, mode, f"at t = {t_good:.6g} s, the last "
+                                  "recorded state before the run failed") +
+            f". The failure it caused: {exc}") from None
 
 
-def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n):
+class Progress:
+    """Progress of a run over ``total`` steps up to ``t_end`` s: a tqdm bar on a terminal;
+    elsewhere (CI logs, files) at most one line per tenth of the run, so a log never gets
+    hundreds of progress lines.  ``progress=False``: silent.  The rate is measured from the
+    first step on (compilation happens before, in :func:`warm_up`)."""
+
+    def __init__(self, progress, total, t_end, label):
+        import sys
+        self.total, self.t_end, self.label = total, t_end, label
+        self.bar, self.lines, self.next_tenth = None, progress, 1
+        self.start, self.done = time.perf_counter(), 0
+        if progress and sys.stderr.isatty():
+            from tqdm import tqdm
+            self.bar = tqdm(total=total, unit="step", desc=label, leave=False,
+                            mininterval=1.0)
+            self.lines = False
+
+    def update(self, done):
+        if self.bar is not None:
+            if done - self.done >= 1000 or done == self.total:
+                self.bar.update(done - self.done)
+                self.done = done
+        elif self.lines and done * 10 >= self.next_tenth * self.total:
+            import sys
+            elapsed = time.perf_counter() - self.start
+            left = elapsed * (self.total - done) / max(done, 1)
+            print(f"  {self.label}: {100 * done / self.total:3.0f} % (t = "
+                  f"{self.t_end * done / self.total:.4g} of {self.t_end:.4g} s), "
+                  f"{elapsed:.0f} s elapsed, ~{left:.0f} s left", file=sys.stderr, flush=True)
+            self.next_tenth = int(done * 10 // self.total) + 1
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=None):
     t_eval = np.linspace(0.0, t_end, int(round(t_end / output_dt)) + 1)
 
     def checked(t, y):
         _check_state(model, t, y, n)
         return rhs(t, y)
-    options = {}
+    options = {} if max_step is None else {"max_step": max_step}
     if method in IMPLICIT_METHODS:
         # structure of d(rhs)/dy: q_dot' = q_dot (identity block), q_ddot and the work
         # rates depend on (q, q_dot) only; the work integrals feed back into nothing.  Without
@@ -212,14 +245,21 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n):
     return res.t, res.y.T, res.nfev
 
 
-def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
+def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
-             switch_rcond=SWITCH_RCOND):
+             switch_rcond=SWITCH_RCOND, check_step=True):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
     dt         : s, RK4 step; shortened if needed to fit a whole number of steps into
-                 t_end (ignored by the solve_ivp methods, which use rtol/atol)
+                 t_end; None: STEP_SAFETY x the stability limit at the start (see
+                 gpme_core.stability).  With the solve_ivp methods (steps chosen from
+                 rtol/atol) a given dt is their largest step (solve_ivp's max_step).
+    check_step : RK4 only: refuse (UnstableStepError, before any step) a dt above the
+                 stability limit of the linearised run at the start, naming the stiffest
+                 mode and a stable step.  A run that fails later (diverges or leaves a
+                 joint range) with dt above the limit at its last recorded state raises
+                 UnstableStepError too, whatever this flag.
     method     : "RK4" (fixed step) or a solve_ivp method: "RK45", "DOP853", "Radau"
     output_dt  : s, spacing of the recorded rows (a multiple of dt for RK4)
     on_manifold: start on the constraints: dependent q and q_dot solved from Phi = 0,
@@ -257,8 +297,23 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
         problems.append(f"method must be one of {METHODS}, got {method!r}")
     if not (np.isfinite(t_end) and t_end > 0):
         problems.append(f"t_end must be positive (s), got {t_end!r}")
-    if not (np.isfinite(dt) and dt > 0):
-        problems.append(f"dt must be positive (s), got {dt!r}")
+    if dt is not None and not (isinstance(dt, (int, float, np.floating)) and np.isfinite(dt)
+                               and dt > 0):
+        problems.append(f"dt must be a positive step in s, got {dt!r}")
+    elif dt is not None and np.isfinite(t_end) and t_end > 0 and dt > t_end:
+        problems.append(f"dt = {dt!r} s is longer than the run (t_end = {t_end!r} s); give "
+                        "dt <= t_end")
+    if not (isinstance(output_dt, (int, float, np.floating)) and np.isfinite(output_dt)
+            and output_dt > 0):
+        problems.append(f"output_dt must be a positive spacing in s, got {output_dt!r}")
+    elif np.isfinite(t_end) and t_end > 0:
+        history_bytes = (t_end / output_dt + 1) * (2 * n + N_WORK) * 8
+        if history_bytes > MAX_HISTORY_BYTES:
+            problems.append(
+                f"t_end = {t_end:g} s recorded every output_dt = {output_dt:g} s is "
+                f"{t_end / output_dt:.3g} rows, {history_bytes / 2 ** 30:.3g} GiB of state "
+                f"in memory (limit {MAX_HISTORY_BYTES / 2 ** 30:g} GiB, "
+                "gpme_core.integrate.MAX_HISTORY_BYTES); shorten t_end or raise output_dt")
     if problems:
         raise ModelError(problems)
     if switch_rcond is not None and not switch_rcond > 0:
@@ -276,14 +331,22 @@ def simulate(system, t_end, q0, q_dot0, dt=1e-4, method="RK4", output_dt=1e-3,
     start = time.perf_counter()
     nfev = None
     if method == "RK4":
+        if dt is None or check_step:
+            limit, mode = rk4_limit(start_system, 0.0, q0, q_dot0)
+            if dt is None:
+                dt = min(STEP_SAFETY * limit, output_dt, t_end)
+            elif dt > limit:
+                raise UnstableStepError(unstable_step_message(dt, limit, mode,
+                                                              "at the start (t = 0)"))
         dt, record_every = rk4_step_plan(t_end, dt, output_dt)
-        ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress)
+        ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition)
         nfev = 4 * int(round(t_end / dt))
     else:
-        ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n)
+        ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n,
+                              max_step=dt)
     wall = time.perf_counter() - start
     df = history_frame(start_system, ts, ys, switch_rcond)
-    df.attrs.update(model=model.name, method=method, dt=dt if method == "RK4" else None,
+    df.attrs.update(model=model.name, method=method, dt=dt,
                     rtol=None if method == "RK4" else rtol, wall_time_s=wall,
                     rhs_evaluations=nfev, dependent=list(dependent),
                     dependent_final=list(partition.dependent), events=events,

@@ -4,7 +4,7 @@ import pytest
 
 from gpme_core import transforms as tf
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
-from gpme_core.errors import ModelError, SimulationError
+from gpme_core.errors import ModelError, SimulationError, UnstableStepError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import RigidBodyInertia, check_pseudo_inertia, cuboid
 from gpme_core.integrate import simulate
@@ -84,9 +84,17 @@ def test_diverging_run_stops_at_the_first_bad_step():
     model = crane_system(3, free).model
     system = ProgrammedMotion(model, ())
     q, qd = initial_state(model)
-    with pytest.raises(SimulationError, match=r"the run diverged at t = .* s with dt = 0\.005 s; "
-                                              r"try a smaller dt"):
+    # refused before the first step, as a step problem
+    with pytest.raises(UnstableStepError, match=r"dt = 0\.005 s is unstable at the start "
+                                                r"\(t = 0\).*stiffest mode .* Hz.*mostly phi_arm"):
         simulate(system, 2.0, q, qd, dt=5e-3)
+    # let through (check_step=False): it blows up, and the blow-up is still reported as the
+    # step's instability at the last recorded state, with the divergence it caused
+    with pytest.raises(UnstableStepError, match=r"dt = 0\.005 s is unstable at t = .* s, the "
+                                                r"last recorded state.*use dt <= .*The failure "
+                                                r"it caused: the run diverged at t = .* s with "
+                                                r"dt = 0\.005 s"):
+        simulate(system, 2.0, q, qd, dt=5e-3, check_step=False)
 
 
 def test_unknown_names():
