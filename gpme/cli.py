@@ -9,6 +9,8 @@ import sys
 import time
 from pathlib import Path
 
+from gpme.budget import MAX_CSV_BYTES, MAX_WALL_S
+
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
@@ -67,6 +69,7 @@ def load_scenarios(paths):
 
 def _simulate_paper(args):
     """The paper's two crane runs with the paper's figures (no --model)."""
+    from gpme.budget import run_budget
     from gpme_examples import paper
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     runs = {}
@@ -75,7 +78,8 @@ def _simulate_paper(args):
         print(f"simulating {label}, t_end = {args.t_end or 10.0:g} s ...", flush=True)
         runs[case] = paper.run_case(case, n_rfe=args.n_rfe, t_end=args.t_end or 10.0, dt=args.dt,
                                     method=args.method or "RK4", on_manifold=args.on_manifold,
-                                    static_arm=args.static_arm, progress=not args.no_progress)
+                                    static_arm=args.static_arm, progress=not args.no_progress,
+                                    before_run=run_budget(label, args.force))
         s = paper.summary(runs[case], transient=min(2.0, 0.5 * (args.t_end or 10.0)))
         print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
               f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
@@ -91,6 +95,7 @@ def _simulate_paper(args):
 
 
 def _simulate_models(args):
+    from gpme.budget import run_budget
     from gpme.runs import simulate_scenario, write_run_outputs
     from crosscheck.run_checks import WARNING, run_rows
     paths = {}
@@ -99,7 +104,8 @@ def _simulate_models(args):
         print(f"simulating {scenario.name}: {scenario.model.n_coordinates} coordinates, "
               f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
         df = simulate_scenario(scenario, t_end=t_end, dt=args.dt, method=args.method,
-                               progress=not args.no_progress)
+                               progress=not args.no_progress,
+                               before_run=run_budget(scenario.name, args.force))
         print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
         for row in run_rows(scenario, df):
             if row["status"] == "info":
@@ -120,8 +126,17 @@ def _simulate(args):
         return _error(output_dir_problem(args.out))
     if args.dt is not None and not args.dt > 0:
         return _error(f"--dt must be a positive step in s, got {args.dt!r}")
+    if args.t_end is not None and not (args.t_end > 0 and args.t_end < float("inf")):
+        return _error(f"--t-end must be a positive duration in s, got {args.t_end!r}")
+    if args.dt is not None and args.t_end is not None and args.dt > args.t_end:
+        return _error(f"--dt {args.dt!r} s is longer than --t-end {args.t_end!r} s; give "
+                      "a step no longer than the run")
     if args.dt is not None and args.method not in (None, "RK4"):
-        return _error(f"--dt is the RK4 step; --method {args.method} chooses its own steps")
+        print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
+              "(its steps follow its error control)", flush=True)
+    if args.n_rfe < 0:
+        return _error(f"--n-rfe must be 0 (rigid arm) or a positive number of RFEM "
+                      f"segments, got {args.n_rfe}")
     if args.model and (args.case != "both" or args.static_arm or args.on_manifold or
                        args.n_rfe != 3):
         return _error("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
@@ -193,13 +208,18 @@ def build_parser():
                      help="s (default: the model file's t_end; the crane: 10)")
     sim.add_argument("--quick", action="store_true", help="the model file's quick_t_end")
     sim.add_argument("--dt", type=float, default=None,
-                     help="RK4 step in s (default: the model file's, else a stable step)")
+                     help="RK4 step in s (default: the model file's, else half the stability "
+                          "limit; refused above the limit); with an adaptive --method its "
+                          "largest step")
     sim.add_argument("--method", choices=("RK4", "RK45", "DOP853", "Radau"), default=None)
     sim.add_argument("--on-manifold", action="store_true",
                      help="built-in crane only: start on the constraints")
     sim.add_argument("--static-arm", action="store_true",
                      help="built-in crane only: start the flexible arm in its gravity sag")
     sim.add_argument("--out", default="reports/simulate", help="output directory")
+    sim.add_argument("--force", action="store_true",
+                     help=f"run even when the estimate (printed before each run) is above "
+                          f"{MAX_WALL_S / 3600:g} h or {MAX_CSV_BYTES / 1e9:g} GB of history")
     sim.add_argument("--no-progress", action="store_true")
     sim.set_defaults(func=_simulate)
     cc = sub.add_parser("crosscheck", help="compare gpme with Pinocchio or MuJoCo")

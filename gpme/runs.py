@@ -23,21 +23,26 @@ def resolved_step(scenario, dt=None):
 
 
 def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
-                      output_dt=None):
+                      output_dt=None, before_run=None, estimate_only=False):
     """History DataFrame of ``scenario`` from its initial state.
 
     t_end  : s, default scenario.t_run(quick)
     dt     : s, RK4 step, default :func:`resolved_step`
-    method : one of gpme_core.integrate.METHODS, default the scenario's integrator
+    method : one of gpme_core.integrate.METHODS, default the scenario's integrator; with an
+             adaptive method a given dt is its largest step
+    before_run, estimate_only : as gpme_core.integrate.simulate (the run's cost)
     """
     method = method or scenario.integrator
     if method not in METHODS:
         raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
     t_end = scenario.t_run(quick) if t_end is None else float(t_end)
     out_dt = output_dt or scenario.output_dt
-    kwargs = {"dt": resolved_step(scenario, dt)} if method == "RK4" else {}
+    step = resolved_step(scenario, dt) if method == "RK4" else dt
     df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
-                  output_dt=out_dt, progress=progress, **kwargs)
+                  output_dt=out_dt, progress=progress, dt=step, before_run=before_run,
+                  estimate_only=estimate_only)
+    if estimate_only:
+        return df
     df.attrs["scenario"] = scenario.name
     return df
 

@@ -25,6 +25,7 @@ from .dynamics import kinetic_energy, potential_energy
 from .errors import ConstraintError, ModelError, SimulationError, UnstableStepError
 from .errors import GpmeError as GpmeErrorBase
 from .gpme import SWITCH_RCOND, partition_rcond
+from .run_cost import estimate_run, time_evaluation
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
                         unstable_step_message)
 
@@ -37,6 +38,8 @@ N_WORK = 3
 DIVERGENCE_LIMIT = 1e6
 # entries of the state named in a divergence message
 MESSAGE_ENTRIES = 6
+# s between two progress lines when stderr is not a terminal
+LOG_LINE_SECONDS = 30.0
 # a recorded history above this many bytes in memory is refused before the run
 MAX_HISTORY_BYTES = 4 * 2 ** 30
 
@@ -187,15 +190,16 @@ def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
 
 class Progress:
     """Progress of a run over ``total`` steps up to ``t_end`` s: a tqdm bar on a terminal;
-    elsewhere (CI logs, files) at most one line per tenth of the run, so a log never gets
-    hundreds of progress lines.  ``progress=False``: silent.  The rate is measured from the
-    first step on (compilation happens before, in :func:`warm_up`)."""
+    elsewhere (CI logs, files) at most one line per tenth of the run and per
+    LOG_LINE_SECONDS, so a log never gets hundreds of progress lines (a short run: none).  ``progress=False``: silent.  The rate is measured from the
+    first step on (compilation happens before: gpme_core.run_cost.time_evaluation)."""
 
     def __init__(self, progress, total, t_end, label):
         import sys
         self.total, self.t_end, self.label = total, t_end, label
         self.bar, self.lines, self.next_tenth = None, progress, 1
         self.start, self.done = time.perf_counter(), 0
+        self.last_line = self.start
         if progress and sys.stderr.isatty():
             from tqdm import tqdm
             self.bar = tqdm(total=total, unit="step", desc=label, leave=False,
@@ -209,12 +213,16 @@ class Progress:
                 self.done = done
         elif self.lines and done * 10 >= self.next_tenth * self.total:
             import sys
-            elapsed = time.perf_counter() - self.start
+            self.next_tenth = int(done * 10 // self.total) + 1
+            now = time.perf_counter()
+            if now - self.last_line < LOG_LINE_SECONDS:
+                return
+            self.last_line = now
+            elapsed = now - self.start
             left = elapsed * (self.total - done) / max(done, 1)
             print(f"  {self.label}: {100 * done / self.total:3.0f} % (t = "
                   f"{self.t_end * done / self.total:.4g} of {self.t_end:.4g} s), "
                   f"{elapsed:.0f} s elapsed, ~{left:.0f} s left", file=sys.stderr, flush=True)
-            self.next_tenth = int(done * 10 // self.total) + 1
 
     def close(self):
         if self.bar is not None:
@@ -247,7 +255,8 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
 
 def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
-             switch_rcond=SWITCH_RCOND, check_step=True):
+             switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
+             estimate_only=False):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
@@ -260,6 +269,11 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                  mode and a stable step.  A run that fails later (diverges or leaves a
                  joint range) with dt above the limit at its last recorded state raises
                  UnstableStepError too, whatever this flag.
+    before_run : None or a callable given the run's gpme_core.run_cost.RunCost (wall time,
+                 history size; one evaluation timed after compilation) before the first
+                 step; it may raise to refuse the run (the CLI's budget does).  With
+                 ``progress`` the first call's numba compilation is announced on stderr.
+    estimate_only: check the inputs and the step, then return the RunCost without running
     method     : "RK4" (fixed step) or a solve_ivp method: "RK45", "DOP853", "Radau"
     output_dt  : s, spacing of the recorded rows (a multiple of dt for RK4)
     on_manifold: start on the constraints: dependent q and q_dot solved from Phi = 0,
@@ -328,17 +342,33 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     events = []
     partition = RunPartition(start_system, switch_rcond, events)
     rhs = _rhs_factory(partition, n)
+    seconds_per_eval = None
+    if progress or before_run is not None:      # compiles first, announced, then times
+        seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=progress)[1]
+    limit = None
+    if method == "RK4" and (dt is None or check_step) or (
+            before_run is not None and method in ("RK45", "DOP853")):
+        limit, mode = rk4_limit(start_system, 0.0, q0, q_dot0)
+    if method == "RK4":
+        if dt is None:
+            dt = min(STEP_SAFETY * limit, output_dt, t_end)
+        elif check_step and dt > limit:
+            raise UnstableStepError(unstable_step_message(dt, limit, mode,
+                                                          "at the start (t = 0)"))
+        dt, record_every = rk4_step_plan(t_end, dt, output_dt)
+    if before_run is not None or estimate_only:
+        if seconds_per_eval is None:
+            seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False)[1]
+        if limit is None and method in ("RK45", "DOP853"):
+            limit = rk4_limit(start_system, 0.0, q0, q_dot0)[0]
+        cost = estimate_run(method, t_end, output_dt, n, history_columns(start_system),
+                            seconds_per_eval, dt=dt, stable_step=limit)
+        if estimate_only:
+            return cost
+        before_run(cost)
     start = time.perf_counter()
     nfev = None
     if method == "RK4":
-        if dt is None or check_step:
-            limit, mode = rk4_limit(start_system, 0.0, q0, q_dot0)
-            if dt is None:
-                dt = min(STEP_SAFETY * limit, output_dt, t_end)
-            elif dt > limit:
-                raise UnstableStepError(unstable_step_message(dt, limit, mode,
-                                                              "at the start (t = 0)"))
-        dt, record_every = rk4_step_plan(t_end, dt, output_dt)
         ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition)
         nfev = 4 * int(round(t_end / dt))
     else:
@@ -353,6 +383,15 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                     switch_rcond=switch_rcond,
                     baumgarte=(system.alpha, system.beta), on_manifold=on_manifold)
     return df
+
+
+def history_columns(system):
+    """Number of columns of :func:`history_frame` for ``system``: t, q, q_dot, three per
+    constraint, one per driven coordinate, three per frame, and six energy columns."""
+    model = system.model
+    drives = {d.joint for d in model.drives}
+    return (1 + 2 * model.n_coordinates + 3 * system.n_constraints + len(drives)
+            + 3 * len(model.frames) + 6)
 
 
 def history_frame(system, ts, ys, switch_rcond=SWITCH_RCOND):

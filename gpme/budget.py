@@ -1,0 +1,50 @@
+"""The command line's budget for one run: its estimated cost printed before it starts, and a
+refusal above the limits unless ``--force`` is given (gpme_core.run_cost estimates it)."""
+import sys
+
+from gpme_core.errors import GpmeError
+
+# s: a run estimated to take longer is refused without --force (an hour: a verification or a
+# study run; longer runs are deliberate and should say so)
+MAX_WALL_S = 3600.0
+# bytes: a run whose history CSV is estimated above this is refused without --force
+MAX_CSV_BYTES = 2e9
+
+
+class BudgetError(GpmeError):
+    """A run is estimated above the command line's limits (the message gives the estimate,
+    the limit, how to reduce it, and --force)."""
+
+
+def over_budget(cost):
+    """Problems of ``cost`` (a gpme_core.run_cost.RunCost) against the limits ([] if none)."""
+    problems = []
+    if cost.wall_s is not None and cost.wall_s > MAX_WALL_S:
+        problems.append(f"an estimated wall time of {_hours(cost.wall_s)} is above the "
+                        f"limit of {_hours(MAX_WALL_S)}")
+    if cost.csv_bytes > MAX_CSV_BYTES:
+        problems.append(f"an estimated history of {cost.csv_bytes / 1e9:.3g} GB is above the "
+                        f"limit of {MAX_CSV_BYTES / 1e9:g} GB")
+    return problems
+
+
+def _hours(s):
+    return f"{s / 3600:.3g} h" if s >= 3600 else f"{s / 60:.3g} min"
+
+
+def run_budget(label, force=False, out=sys.stdout):
+    """A ``before_run`` callable for gpme_core.integrate.simulate: prints the estimate of run
+    ``label`` and raises BudgetError above the limits unless ``force``."""
+    def check(cost):
+        print(f"  estimate: {cost.describe()}", file=out, flush=True)
+        problems = over_budget(cost)
+        if problems and not force:
+            raise BudgetError(
+                f"{label}: {' and '.join(problems)} ({cost.describe()}). Shorten t_end "
+                "(--t-end), raise the step (--dt, within its stability limit) or the "
+                "recording interval, use fewer RFEM segments, or give --force to run it "
+                "anyway")
+        if problems:
+            print(f"  --force: running although {' and '.join(problems)}", file=out,
+                  flush=True)
+    return check

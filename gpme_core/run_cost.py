@@ -1,0 +1,161 @@
+"""What a run will cost before it starts: wall time, the recorded history's size in memory
+and as CSV, from the model, the step and one measured right-hand-side evaluation.
+
+The estimate is made of counts that are exact for RK4 (steps x 4 evaluations of the reduced
+GPME) and lower bounds for the adaptive methods (an explicit method is held to about RK4's
+stability step by the stiffest mode whatever its tolerance; Radau's steps follow its error
+control and are not known before the run, so only its rows are counted), times the cost of
+one evaluation measured on this machine after the numba kernels are compiled.
+"""
+import sys
+import time
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+# evaluations of the right-hand side per step of each method
+STAGES = {"RK4": 4, "RK45": 6, "DOP853": 12, "Radau": 3}
+# CSV bytes per value: '%.17g' of a double is at most 24 characters plus the separator
+CSV_BYTES_PER_VALUE = 25
+# the history in memory: the integrated states (float64) and the DataFrame built from them
+MEMORY_COPIES = 3
+# evaluations timed to measure the cost of one (after the first, which may compile)
+TIMED_EVALUATIONS = 20
+# wall time per evaluation over the bare reduced solve: the state update, the divergence
+# and joint-range check per step, and building the history (one more solve per row);
+# measured 1.3-1.4 on the crane (n_rfe = 3, RK4, 0.05 s)
+STEP_OVERHEAD = 1.35
+
+
+@dataclass(frozen=True)
+class RunCost:
+    """Estimated cost of one run.
+
+    method           : the integrator
+    steps            : number of steps (RK4: exact; adaptive explicit: a lower bound from
+                       the stability step; Radau: None, not known before the run)
+    evaluations      : right-hand-side evaluations (same exactness as steps)
+    seconds_per_eval : s, measured cost of one evaluation on this machine
+    rows, columns    : the recorded history's shape
+    memory_bytes     : bytes of the history in memory while the run is written out
+    csv_bytes        : bytes of the history as CSV
+    exact            : True when ``steps`` is a count, False when it is a lower bound
+    """
+    method: str
+    steps: Optional[int]
+    evaluations: Optional[int]
+    seconds_per_eval: float
+    rows: int
+    columns: int
+    memory_bytes: float
+    csv_bytes: float
+    exact: bool
+
+    @property
+    def wall_s(self):
+        """s, the integration's wall time (None when not known before the run)."""
+        if self.evaluations is None:
+            return None
+        return (self.evaluations + self.rows) * self.seconds_per_eval * STEP_OVERHEAD
+
+    def describe(self):
+        """One line: '~2.1 min wall (RK4: 250,000 steps x 4 evaluations of 126 us),
+        history 10,001 rows x 45 columns: 11 MB CSV, 11 MB in memory'."""
+        if self.wall_s is None:
+            time_text = (f"wall time not known before the run ({self.method} chooses its "
+                         f"steps; one evaluation costs {_seconds(self.seconds_per_eval)})")
+        else:
+            bound = "" if self.exact else "at least "
+            time_text = (f"{bound}{_seconds(self.wall_s)} wall ({self.method}: "
+                         f"{bound}{self.steps:,} steps x {STAGES[self.method]} evaluations "
+                         f"of {_seconds(self.seconds_per_eval)})")
+        return (f"{time_text}; history {self.rows:,} rows x {self.columns} columns: "
+                f"{_bytes(self.csv_bytes)} CSV, {_bytes(self.memory_bytes)} in memory")
+
+
+def _seconds(s):
+    if s < 1e-3:
+        return f"{s * 1e6:.0f} us"
+    if s < 1.0:
+        return f"{s * 1e3:.0f} ms"
+    if s < 120:
+        return f"{s:.0f} s"
+    if s < 7200:
+        return f"{s / 60:.1f} min"
+    if s < 2 * 86400:
+        return f"{s / 3600:.1f} h"
+    if s < 2 * 365 * 86400:
+        return f"{s / 86400:.1f} days"
+    return f"{s / (365.25 * 86400):.3g} years"
+
+
+def _bytes(b):
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b:.0f} B"
+
+
+def kernels_compiled():
+    """Whether the numba kernels are compiled (or loaded from their cache) in this process;
+    True when the compiled path is off."""
+    from . import fast
+    if not fast.ENABLED:
+        return True
+    return all(getattr(fast, name).signatures for name in ("chain_and_terms", "reduced_solve",
+                                                           "point"))
+
+
+def time_evaluation(system, q0, q_dot0, announce=True):
+    """(compile_s, seconds_per_eval): the first reduced solve at (0, q0, q_dot0) timed on its
+    own (it compiles the numba kernels, or loads them from their cache, when this process has
+    not yet; with ``announce`` that is said on stderr before it starts), then the mean of
+    TIMED_EVALUATIONS more.
+
+    system : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
+    """
+    compiling = not kernels_compiled()
+    if compiling and announce:
+        print("compiling the numba kernels (first call in this process; cached on disk "
+              "for the next) ...", file=sys.stderr, flush=True)
+    start = time.perf_counter()
+    system.solve(0.0, q0, q_dot0)
+    first = time.perf_counter() - start
+    if compiling and announce:
+        print(f"  compiled in {first:.1f} s", file=sys.stderr, flush=True)
+    start = time.perf_counter()
+    for _ in range(TIMED_EVALUATIONS):
+        system.solve(0.0, q0, q_dot0)
+    return first, (time.perf_counter() - start) / TIMED_EVALUATIONS
+
+
+def estimate_run(method, t_end, output_dt, n_coordinates, columns, seconds_per_eval,
+                 dt=None, stable_step=None):
+    """RunCost of a run.
+
+    method          : "RK4", "RK45", "DOP853" or "Radau"
+    t_end, output_dt: s
+    n_coordinates   : n (the integrated state is 2n + 3 numbers)
+    columns         : columns of the recorded history (gpme_core.integrate.history_frame)
+    seconds_per_eval: s, one right-hand-side evaluation (:func:`time_evaluation`)
+    dt              : s, RK4's step (after gpme_core.integrate.rk4_step_plan); for the
+                      adaptive methods their largest step (None: unbounded)
+    stable_step     : s, RK4's stability limit at the start (gpme_core.stability.rk4_limit):
+                      the explicit adaptive methods' steps stay about that short
+    """
+    rows = int(np.floor(t_end / output_dt + 1e-9)) + 1
+    state = 2 * n_coordinates + 3
+    memory = rows * (state + columns) * 8.0 * MEMORY_COPIES / 2
+    csv = rows * columns * float(CSV_BYTES_PER_VALUE)
+    if method == "RK4":
+        steps, exact = int(round(t_end / dt)), True
+    elif method in ("RK45", "DOP853"):
+        longest = min(x for x in (dt, stable_step, np.inf) if x is not None)
+        steps = int(np.ceil(t_end / longest)) if np.isfinite(longest) else 1
+        exact = False
+    else:
+        steps, exact = (int(np.ceil(t_end / dt)), False) if dt else (None, False)
+    evaluations = None if steps is None else steps * STAGES[method]
+    return RunCost(method, steps, evaluations, seconds_per_eval, rows, columns, memory, csv,
+                   exact)
