@@ -14,6 +14,7 @@ unchanged.  Exit status 1 when any check fails (or a step crashes), 0 otherwise.
 import json
 import os
 import shutil
+import socket
 import sys
 import tempfile
 import time
@@ -21,6 +22,8 @@ import traceback
 from pathlib import Path
 
 import pandas as pd
+
+from gpme.out_lock import exclusive_output
 
 from .reports.index_page import write_index
 from .reports.tables import atomic_write_text, summarise, write_csv
@@ -33,6 +36,11 @@ FULL_T_END = 10.0
 # crane cases of the default run (no --model): n_rfe of the arm, 0 = rigid
 PINOCCHIO_CRANE = {False: (0, 1, 3, 10), True: (0, 3)}
 MUJOCO_CRANE = (0, 1)
+PARTIAL_SUFFIX = ".partial"
+OWNER_FILE = ".owner.json"
+# s: a staging directory without a readable owner (or from another host) older than this is
+# taken as dead
+STALE_AFTER_S = 2 * 86400.0
 
 
 def _say(msg):
@@ -89,6 +97,19 @@ def _engine_step(name, run_dir, scenarios, quick, progress):
     return module.run(run_dir, scenarios, quick=quick, progress=progress)
 
 
+def _report_crash(staging, step, exc):
+    """One line on the console; the traceback of an unexpected exception (not a gpme input
+    or run error, whose message says it all) into <run>/<step>_crash.txt."""
+    from gpme_core.errors import GpmeError
+    if isinstance(exc, GpmeError):
+        _say(f"[{step}] stopped: {exc}")
+        return
+    path = staging / f"{step}_crash.txt"
+    atomic_write_text(path, "".join(traceback.format_exception(exc)))
+    _say(f"[{step}] crashed: {type(exc).__name__}: {exc} (traceback in "
+         f"{path.name} of the report; please report it as a gpme bug)")
+
+
 def _crash_row(step, exc):
     return pd.DataFrame([{
         "engine": step, "model": "-", "quantity": "step crashed",
@@ -100,10 +121,72 @@ def _crash_row(step, exc):
 
 def _claim_run_dir(root, run_id):
     """A fresh hidden staging directory root/.<run_id>.*.partial (mkdtemp: unique even for
-    runs started in the same second); _publish picks the final name."""
+    runs started in the same second) with an owner file naming this process (so that a
+    later run can tell a dead run's leftovers from a live run's); _publish picks the final
+    name."""
     root.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=".partial", dir=root))
+    staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=PARTIAL_SUFFIX, dir=root))
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(staging, 0o777 & ~umask)      # mkdtemp's 0700 would hide the report from others
+    (staging / OWNER_FILE).write_text(json.dumps({"pid": os.getpid(),
+                                                  "host": socket.gethostname()}))
     return staging
+
+
+def _owner_alive(staging):
+    """Whether the run that made ``staging`` may still be running: its process exists on this
+    host (or it belongs to another host, or says nothing, and is younger than STALE_AFTER_S)."""
+    try:
+        owner = json.loads((staging / OWNER_FILE).read_text())
+        pid, host = int(owner["pid"]), owner["host"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return time.time() - staging.stat().st_mtime < STALE_AFTER_S
+    if host != socket.gethostname():
+        return time.time() - staging.stat().st_mtime < STALE_AFTER_S
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:       # exists, another user's
+        return True
+    return True
+
+
+def remove_dead_partials(root):
+    """Remove root/.*.partial staging directories whose run is dead (killed with SIGKILL, a
+    power cut: a run that could clean up did); returns their names."""
+    removed = []
+    for staging in sorted(Path(root).glob(f".*{PARTIAL_SUFFIX}")):
+        if staging.is_dir() and not _owner_alive(staging):
+            shutil.rmtree(staging, ignore_errors=True)
+            removed.append(staging.name)
+    return removed
+
+
+def _run_dirs(root):
+    """Published run directories of root (those with a summary.json), oldest first."""
+    runs = [d for d in Path(root).iterdir()
+            if d.is_dir() and not d.is_symlink() and not d.name.startswith(".")
+            and (d / "summary.json").is_file()]
+    return sorted(runs, key=lambda d: (d.stat().st_mtime, d.name))
+
+
+def prune_runs(root, keep):
+    """Keep the ``keep`` newest published runs of root (and whatever `latest` points at);
+    remove the older ones; returns their names."""
+    if keep is None:
+        return []
+    latest = root / "latest"
+    current = latest.resolve() if latest.is_symlink() else None
+    runs = _run_dirs(root)
+    removed = []
+    for d in runs[:max(0, len(runs) - keep)]:
+        if current is not None and d.resolve() == current:
+            continue
+        shutil.rmtree(d, ignore_errors=True)
+        removed.append(d.name)
+    return removed
 
 
 def _publish(root, staging, run_id):
@@ -136,21 +219,30 @@ def _models_record(scenarios):
     return out
 
 
-def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None):
+def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None,
+               keep=None):
     """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
 
     scenarios: gpme_io.scenario.Scenario list (``--model`` files); None runs the paper's
     crane (its two runs with the paper's figures, and the default crane cases per engine).
+    keep     : after publishing, keep only this many newest runs in root (None: all).
+    Staging directories of dead runs in root are removed first.
     """
     root = Path(root)
     only = STEP_ALIASES.get(only, only)
     run_id = run_id or time.strftime("%Y%m%d-%H%M%S") + ("-quick" if quick else "")
+    root.mkdir(parents=True, exist_ok=True)
+    for name in remove_dead_partials(root):
+        _say(f"removed {root / name}: the partial directory of a run that died")
     staging = _claim_run_dir(root, run_id)
     try:
-        return _run_steps(root, staging, run_id, quick, only, progress, scenarios)
+        result = _run_steps(root, staging, run_id, quick, only, progress, scenarios)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
+    for name in prune_runs(root, keep):
+        _say(f"removed {root / name} (--keep {keep})")
+    return result
 
 
 def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
@@ -175,8 +267,8 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
                 tables[step] = _engine_step(step, staging, chosen, quick, progress)
         except Exception as exc:  # a crashed step is a failed check, reported in full
-            traceback.print_exc()
             tables[step] = _crash_row(step, exc)
+            _report_crash(staging, step, exc)
         timings[step] = time.perf_counter() - t0
         failed = int(_failed(tables[step]).sum())
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
@@ -212,8 +304,10 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
                     "status": _status(r), "reason": r["reason"]}
                    for r in summary.to_dict("records")]}, indent=1))
     write_index(staging, summary, rows, runs, meta, record)
-    final, run_id = _publish(root, staging, run_id)
-    _point_latest(root, run_id)
+    (staging / OWNER_FILE).unlink()
+    with exclusive_output(root):            # one publisher at a time: name and `latest`
+        final, run_id = _publish(root, staging, run_id)
+        _point_latest(root, run_id)
     return final, summary, rows
 
 
@@ -244,6 +338,27 @@ def _point_latest(root, run_id):
     os.replace(tmp, root / "latest")
 
 
+def estimate_runs(scenarios, quick, force):
+    """Print the estimated cost of the gpme runs of a verification before any work, and
+    refuse (gpme.budget.BudgetError) one above the limits unless ``force``; an input problem
+    found on the way (an unstable step in a model file, say) is raised here too."""
+    from gpme.budget import run_budget
+    _say("estimated cost of the gpme runs (the engine steps take about as long again):")
+    if scenarios is None:
+        from gpme_examples import paper
+        t_end = QUICK_T_END if quick else FULL_T_END
+        for case in ("rigid", "flexible"):
+            _say(f"  paper, {case} crane, {t_end:g} s:")
+            run_budget(f"the paper's {case} crane", force)(
+                paper.run_case(case, t_end=t_end, estimate_only=True))
+        return
+    from gpme.runs import simulate_scenario
+    for scenario in scenarios:
+        _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
+        run_budget(scenario.name, force)(simulate_scenario(scenario, quick=quick,
+                                                           estimate_only=True))
+
+
 def main(args):
     from gpme_core.errors import GpmeError
     scenarios = None
@@ -254,8 +369,14 @@ def main(args):
         except GpmeError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
+    try:
+        estimate_runs(scenarios, args.quick, getattr(args, "force", False))
+    except GpmeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
-                                     progress=not args.no_progress, scenarios=scenarios)
+                                     progress=not args.no_progress, scenarios=scenarios,
+                                     keep=getattr(args, "keep", None))
     cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "status"]
     status = summary.apply(_status, axis=1)

@@ -141,8 +141,10 @@ def _simulate(args):
                        args.n_rfe != 3):
         return _error("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
                       "crane runs; with --model the model file sets them")
+    from gpme.out_lock import exclusive_output
     try:
-        paths = _simulate_models(args) if args.model else _simulate_paper(args)
+        with exclusive_output(args.out):
+            paths = _simulate_models(args) if args.model else _simulate_paper(args)
     except GpmeError as exc:
         return _error(exc)
     for p in paths.values():
@@ -154,10 +156,12 @@ def _crosscheck(args):
     from gpme_core.errors import GpmeError
     if args.out and output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
-    from crosscheck.verify import default_scenarios
+    from crosscheck.verify import default_scenarios, estimate_runs
+    from gpme.out_lock import exclusive_output
     try:
         scenarios = load_scenarios(args.model) if args.model else default_scenarios(
             args.engine, args.quick)
+        estimate_runs(scenarios, args.quick, args.force)
     except GpmeError as exc:
         return _error(exc)
     if args.engine == "pinocchio":
@@ -165,7 +169,11 @@ def _crosscheck(args):
     else:
         from crosscheck.mujoco import check
     out = Path(args.out) if args.out else Path("reports") / time.strftime(f"{args.engine}-%Y%m%d-%H%M%S")
-    df = check.run(out, scenarios, quick=args.quick, progress=not args.no_progress)
+    try:
+        with exclusive_output(out):
+            df = check.run(out, scenarios, quick=args.quick, progress=not args.no_progress)
+    except GpmeError as exc:
+        return _error(exc)
     failed = df[df["status"] == "fail"] if "status" in df else df[~df["passed"].astype(bool)]
     print(f"{len(df)} comparisons, {len(failed)} failed; report in {out}")
     if len(failed):
@@ -177,6 +185,8 @@ def _crosscheck(args):
 def _verify(args):
     if output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
+    if args.keep is not None and args.keep < 1:
+        return _error(f"--keep must be at least 1 (the run just made), got {args.keep}")
     from crosscheck import verify
     return verify.main(args)
 
@@ -227,6 +237,9 @@ def build_parser():
     _model_option(cc)
     cc.add_argument("--quick", action="store_true", help="CI-sized run")
     cc.add_argument("--out", default=None, help="report directory (default reports/<engine>-<time>)")
+    cc.add_argument("--force", action="store_true",
+                    help=f"run even when a gpme run is estimated above {MAX_WALL_S / 3600:g} h "
+                         f"or {MAX_CSV_BYTES / 1e9:g} GB of history")
     cc.add_argument("--no-progress", action="store_true")
     cc.set_defaults(func=_crosscheck)
     ver = sub.add_parser("verify", help="the whole verification with HTML/CSV reports")
@@ -235,6 +248,12 @@ def build_parser():
     ver.add_argument("--only", choices=("gpme", "paper", "pinocchio", "mujoco"), default=None,
                      help="one step only ('paper' is the gpme step of the default crane)")
     ver.add_argument("--out", default="reports", help="reports root directory")
+    ver.add_argument("--keep", type=int, default=None, metavar="N",
+                     help="after the run, keep only the N newest runs in --out (default: "
+                          "all); partial directories of dead runs are always removed")
+    ver.add_argument("--force", action="store_true",
+                     help=f"run even when a gpme run is estimated above "
+                          f"{MAX_WALL_S / 3600:g} h or {MAX_CSV_BYTES / 1e9:g} GB of history")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
     from gpme_study.command import add_arguments as add_sweep_arguments
