@@ -1,0 +1,219 @@
+"""Bad input to `gpme simulate`, `gpme crosscheck` and `gpme verify` and to
+gpme_core.integrate.simulate: every case ends in one clear error (exit status 2 on the command
+line, a GpmeError in Python) that names the value and what would be valid, before any work,
+and never in a traceback.
+
+The command cases call gpme.cli.main in this process: an exception escaping main (what a
+user would see as a traceback) fails the test, and stderr is checked for "Traceback" too.
+"""
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gpme.cli import main
+from gpme.out_lock import exclusive_output
+from gpme_core.errors import GpmeError, ModelError, UnstableStepError
+from gpme_core.integrate import simulate
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
+
+ROOT = Path(__file__).resolve().parents[1]
+RIGID_TOML = ROOT / "models" / "crane_rigid.toml"
+
+
+def _run(argv, capsys):
+    code = main(argv)
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err and "Traceback" not in captured.out
+    return code, captured.err
+
+
+def _model_copy(tmp_path, **run):
+    """models/crane_rigid.toml with [run] keys replaced (the URDF path made absolute)."""
+    text = RIGID_TOML.read_text()
+    for key, value in run.items():
+        lines = [ln for ln in text.splitlines() if not ln.strip().startswith(f"{key} ")]
+        text = "\n".join(lines) + "\n"
+        text = text.replace("[run]\n", f"[run]\n{key} = {value}\n", 1)
+    path = tmp_path / "model.toml"
+    path.write_text(text)
+    for side in RIGID_TOML.parent.glob("*.urdf"):
+        shutil.copy(side, tmp_path / side.name)
+    if (RIGID_TOML.parent / "urdf").is_dir():
+        shutil.copytree(RIGID_TOML.parent / "urdf", tmp_path / "urdf", dirs_exist_ok=True)
+    return path
+
+
+# (id, argv after "simulate", words that must all be in the message)
+SIMULATE_CASES = [
+    ("t_end_absurd", ["--t-end", "1e12"], ["1e+12", "rows", "GiB", "shorten t_end"]),
+    ("t_end_negative", ["--t-end", "-1"], ["--t-end must be a positive duration", "-1.0"]),
+    ("t_end_zero", ["--t-end", "0"], ["--t-end must be a positive duration", "0.0"]),
+    ("t_end_nan", ["--t-end", "nan"], ["--t-end must be a positive duration", "nan"]),
+    ("t_end_inf", ["--t-end", "inf"], ["--t-end must be a positive duration", "inf"]),
+    ("dt_zero", ["--dt", "0"], ["--dt must be a positive step", "0.0"]),
+    ("dt_negative", ["--dt=-1e-3"], ["--dt must be a positive step", "-0.001"]),
+    ("dt_nan", ["--dt", "nan"], ["--dt must be a positive step", "nan"]),
+    ("dt_inf", ["--dt", "inf", "--t-end", "1"], ["--dt", "inf"]),
+    ("dt_longer_than_run", ["--dt", "1", "--t-end", "0.5"], ["--dt 1.0 s is longer than "
+                                                             "--t-end 0.5 s"]),
+    ("dt_unstable", ["--case", "flexible", "--dt", "0.01", "--t-end", "1"],
+     ["dt = 0.01 s is unstable at the start", "stiffest mode", "Hz", "use dt <="]),
+    ("n_rfe_negative", ["--case", "flexible", "--n-rfe", "-1"],
+     ["--n-rfe must be 0", "-1"]),
+    ("n_rfe_over_budget", ["--case", "flexible", "--n-rfe", "40", "--t-end", "1"],
+     ["estimated wall time", "above the limit of 1 h", "--force", "fewer RFEM segments"]),
+    ("history_over_memory", ["--case", "rigid", "--t-end", "1e5", "--dt", "1e-3"],
+     ["1e+08 rows", "GiB of state in memory", "limit 4 GiB"]),
+    ("model_missing", ["--model", "/nonexistent/model.toml"],
+     ["/nonexistent/model.toml", "cannot read the model file", "No such file"]),
+    ("model_is_directory", ["--model", "/tmp"], ["/tmp", "cannot read the model file",
+                                                 "directory"]),
+    ("model_with_crane_flags", ["--model", str(RIGID_TOML), "--case", "flexible"],
+     ["--case, --n-rfe, --on-manifold and --static-arm choose the built-in crane runs"]),
+    ("model_dt_unstable", ["--model", str(RIGID_TOML), "--dt", "0.5", "--t-end", "1"],
+     ["dt = 0.5 s is unstable at the start", "stiffest mode", "use dt <= 0.049 s"]),
+    ("model_t_end_absurd", ["--model", str(RIGID_TOML), "--t-end", "1e9"],
+     ["1e+09 s", "rows", "GiB"]),
+]
+
+
+@pytest.mark.parametrize("argv,words", [c[1:] for c in SIMULATE_CASES],
+                         ids=[c[0] for c in SIMULATE_CASES])
+def test_simulate_refuses(argv, words, tmp_path, capsys):
+    out = tmp_path / "out"
+    code, err = _run(["simulate", *argv, "--out", str(out), "--no-progress"], capsys)
+    assert code == 2, err
+    assert err.startswith("error: ") and err.count("\n") >= 1
+    for word in words:
+        assert word in err, (word, err)
+    assert not list(out.glob("*.csv")), "nothing written for a refused run"
+
+
+def test_simulate_out_is_a_file(tmp_path, capsys):
+    target = tmp_path / "a_file"
+    target.write_text("keep me")
+    code, err = _run(["simulate", "--case", "rigid", "--t-end", "0.01", "--out", str(target),
+                      "--no-progress"], capsys)
+    assert code == 2 and "exists and is not a directory; give a directory" in err
+    assert target.read_text() == "keep me"
+
+
+def test_simulate_out_unwritable(capsys):
+    code, err = _run(["simulate", "--case", "rigid", "--t-end", "0.01", "--out",
+                      "/proc/gpme_cannot_be_here", "--no-progress"], capsys)
+    assert code == 2 and "cannot be created or written" in err
+
+
+def test_simulate_out_being_written_by_another_run(tmp_path, capsys):
+    with exclusive_output(tmp_path):
+        code, err = _run(["simulate", "--case", "rigid", "--t-end", "0.01", "--out",
+                          str(tmp_path), "--no-progress"], capsys)
+    assert code == 2 and "is being written by another gpme run (pid" in err
+    assert "give another --out" in err
+
+
+def test_simulate_model_file_with_absurd_t_end(tmp_path, capsys):
+    model = _model_copy(tmp_path, t_end="1e9")
+    code, err = _run(["simulate", "--model", str(model), "--out", str(tmp_path / "o"),
+                      "--no-progress"], capsys)
+    assert code == 2 and "1e+09 s" in err and "rows" in err
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["simulate", "--method", "Euler"], ["invalid choice: 'Euler'", "RK4"]),
+    (["simulate", "--t-end", "ten"], ["invalid float value: 'ten'"]),
+    (["simulate", "--n-rfe", "2.5"], ["invalid int value: '2.5'"]),
+    (["verify", "--only", "drake"], ["invalid choice: 'drake'"]),
+    (["crosscheck", "bullet"], ["invalid choice: 'bullet'"]),
+    (["verify", "--keep", "many"], ["invalid int value: 'many'"]),
+], ids=["method", "t_end_text", "n_rfe_float", "only", "engine", "keep_text"])
+def test_argument_parser_errors(argv, words, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "usage: gpme" in err and "Traceback" not in err
+    for word in words:
+        assert word in err
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["verify", "--keep", "0"], ["--keep must be at least 1", "got 0"]),
+    (["verify", "--model", "/nonexistent.toml"], ["/nonexistent.toml",
+                                                  "cannot read the model file"]),
+    (["crosscheck", "mujoco", "--model", "/nonexistent.toml"], ["cannot read the model file"]),
+], ids=["keep_zero", "verify_model_missing", "crosscheck_model_missing"])
+def test_verify_and_crosscheck_refuse(argv, words, tmp_path, capsys):
+    code, err = _run([*argv, "--out", str(tmp_path / "r"), "--no-progress"], capsys)
+    assert code == 2
+    for word in words:
+        assert word in err
+    assert not any((tmp_path / "r").glob("2*")), "no run directory for a refused run"
+
+
+@pytest.mark.parametrize("command", [["verify"], ["crosscheck", "pinocchio"]])
+def test_report_out_is_a_file(command, tmp_path, capsys):
+    target = tmp_path / "a_file"
+    target.write_text("x")
+    code, err = _run([*command, "--out", str(target), "--no-progress"], capsys)
+    assert code == 2 and "exists and is not a directory" in err
+
+
+@pytest.mark.parametrize("run_keys,words", [
+    ({"t_end": "1e9"}, ["1e+09 s", "rows", "GiB"]),
+    ({"dt": "0.5"}, ["dt = 0.5 s is unstable at the start", "stiffest mode"]),
+], ids=["t_end_absurd", "dt_unstable"])
+def test_verify_refuses_a_bad_model_run_before_any_work(run_keys, words, tmp_path, capsys):
+    model = _model_copy(tmp_path, **run_keys)
+    root = tmp_path / "reports"
+    code, err = _run(["verify", "--model", str(model), "--out", str(root), "--no-progress"],
+                     capsys)
+    assert code == 2
+    for word in words:
+        assert word in err
+    assert not list(root.iterdir()) if root.exists() else True
+
+
+# ---- Python API ---------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def crane():
+    params = CraneParameters()
+    system = crane_system(0, params)
+    return system, *initial_state(system.model, params)
+
+
+@pytest.mark.parametrize("kwargs,error,words", [
+    ({"dt": 0.0}, ModelError, ["dt must be a positive step in s, got 0.0"]),
+    ({"dt": "1e-3"}, ModelError, ["dt must be a positive step in s, got '1e-3'"]),
+    ({"dt": 2.0}, ModelError, ["dt = 2.0 s is longer than the run"]),
+    ({"output_dt": 0.0}, ModelError, ["output_dt must be a positive spacing"]),
+    ({"output_dt": np.nan}, ModelError, ["output_dt must be a positive spacing"]),
+    ({"t_end": 1e10}, ModelError, ["rows", "GiB of state in memory",
+                                   "MAX_HISTORY_BYTES"]),
+    ({"method": "Euler"}, ModelError, ["method must be one of", "'Euler'"]),
+    ({"dt": 0.5}, UnstableStepError, ["dt = 0.5 s is unstable", "stiffest mode"]),
+    ({"switch_rcond": -1.0}, ModelError, ["switch_rcond must be a positive number or None"]),
+], ids=["dt_zero", "dt_text", "dt_too_long", "output_dt_zero", "output_dt_nan",
+        "t_end_memory", "method", "dt_unstable", "switch_rcond"])
+def test_simulate_api_refuses(crane, kwargs, error, words):
+    system, q0, q_dot0 = crane
+    args = {"t_end": 1.0, **kwargs}
+    with pytest.raises(error) as exc:
+        simulate(system, q0=q0, q_dot0=q_dot0, **args)
+    assert isinstance(exc.value, GpmeError)
+    for word in words:
+        assert word in str(exc.value)
+
+
+def test_simulate_api_lists_every_problem_at_once(crane):
+    system, q0, _ = crane
+    with pytest.raises(ModelError) as exc:
+        simulate(system, -1.0, q0[:2], [np.nan] * len(q0), dt=-1.0, method="Euler",
+                 output_dt=0.0)
+    text = str(exc.value)
+    for word in ("q0 must have shape", "q_dot0 must be finite", "method must be one of",
+                 "t_end must be positive", "dt must be a positive step",
+                 "output_dt must be a positive spacing"):
+        assert word in text
