@@ -13,9 +13,12 @@ from T_i and T_ij, see gpme_core.kinematics.point_kinematics):
     a     = grad(phi)^T C
     kappa = grad(phi) . d + p_dot^T Hess(phi) p_dot + 2 grad(phi_t) . p_dot + phi_tt
 """
+import math
+
 import numpy as np
 
-from .errors import ModelError
+from . import expression_checks as checks
+from .errors import ConstraintError, ModelError
 from .kinematics import point_kinematics
 from .time_functions import TimeFunction
 
@@ -79,44 +82,107 @@ class CoordinateProgramme(PointConstraint):
         self._zero = np.zeros(3)
 
     def local_terms(self, p, t):
-        f = self.function
-        return (float(p[self.axis]) - f.value(t), self._e, self._zero_hess, -f.rate(t),
-                self._zero, -f.acceleration(t))
+        f, f_t, f_tt = _time_derivatives(
+            self.function, t, lambda: f"programme {self.name!r} ({'xyz'[self.axis]} of frame "
+                                      f"{self.frame!r} = f(t), at {checks.format_point(p)})")
+        return (float(p[self.axis]) - f, self._e, self._zero_hess, -f_t, self._zero, -f_tt)
+
+
+_XYZ = ("x", "y", "z")
+_TERM_NAMES = (("phi",) + tuple(f"grad[{a}]" for a in _XYZ)
+               + tuple(f"Hessian[{a}, {b}]" for a in _XYZ for b in _XYZ) + ("phi_t",)
+               + tuple(f"grad_t[{a}]" for a in _XYZ) + ("phi_tt",))
+"""Names of the 18 numbers of :meth:`SympyPointConstraint.local_terms`, in order."""
+_F64 = np.float64
 
 
 class SympyPointConstraint(PointConstraint):
     """phi given as a SymPy expression in the symbols x, y, z, t (world frame, SI).
 
+    expr    : a SymPy expression, or a string read by ``sympy.sympify`` (code you trust;
+              gpme_io.modelfile parses a model file's strings without eval)
+    symbols : the symbols (x, y, z, t) if not the plain ``sympy.symbols("x y z t")``; a
+              symbol with one of these names but other assumptions is taken as it
+
     The gradient, Hessian and time derivatives are derived once here and compiled with
-    ``sympy.lambdify``; nothing is re-derived during integration.
+    ``sympy.lambdify``; nothing is re-derived during integration.  The expression is
+    checked first (gpme_core.expression_checks): one ModelError lists every problem
+    (not an expression, other symbols, no x, y or z, undefined functions, constants that
+    are not finite reals, functions without a second derivative such as Abs, sign,
+    Piecewise, Max, and anything Python's math module or numpy cannot evaluate).
+    :meth:`local_terms` raises a ConstraintError naming the constraint, t, the point and
+    the quantities when a value is not finite (a pole, a square root or logarithm out of
+    its domain); it never warns or divides by a Python zero.
     """
 
     def __init__(self, expr, frame="E", name="Phi", symbols=None):
         import sympy as sp
         x, y, z, t = symbols or sp.symbols("x y z t")
-        try:
-            expr = sp.sympify(expr)
-        except (sp.SympifyError, TypeError) as exc:
-            raise ModelError(f"constraint {name!r}: cannot read {expr!r} as a SymPy expression "
-                             f"({exc})") from None
-        unknown = expr.free_symbols - {x, y, z, t}
-        if unknown:
-            raise ModelError(f"constraint {name!r}: expression uses {sorted(map(str, unknown))}; "
-                             "only x, y, z (world coordinates, m) and t (s) are allowed")
+        label = f"constraint {name!r}"
+        parsed, problems = checks.read_expression(
+            expr, {"x": x, "y": y, "z": z, "t": t}, label,
+            "x, y, z (world coordinates, m) and t (s)")
+        if parsed is not None and not parsed.free_symbols & {x, y, z}:
+            problems.append(f"{label}: {str(parsed)!r} does not depend on x, y or z, so its "
+                            "Jacobian row is zero; a constraint must involve the frame's "
+                            "position (a JointProgramme gives a joint q(t))")
+        if problems:
+            raise ModelError(problems)
         xyz = (x, y, z)
-        grad = [sp.diff(expr, v) for v in xyz]
-        hess = [[sp.diff(g, v) for v in xyz] for g in grad]
-        phi_t = sp.diff(expr, t)
+        grad = [sp.diff(parsed, v) for v in xyz]
+        hess = [sp.diff(g, v) for g in grad for v in xyz]
+        phi_t = sp.diff(parsed, t)
         grad_t = [sp.diff(phi_t, v) for v in xyz]
         phi_tt = sp.diff(phi_t, t)
-        self.expr = expr
-        self._f = sp.lambdify((x, y, z, t), [expr, grad, hess, phi_t, grad_t, phi_tt], "numpy")
+        fns, problems = checks.compile_expressions(
+            (x, y, z, t), [parsed, *grad, *hess, phi_t, *grad_t, phi_tt], label, parsed)
+        if problems:
+            raise ModelError(problems)
+        self.expr = parsed
+        self._fast, self._careful = fns["math"], fns["numpy"]
         self.frame, self.name = frame, name
 
     def local_terms(self, p, t):
-        phi, grad, hess, phi_t, grad_t, phi_tt = self._f(p[0], p[1], p[2], t)
-        return (float(phi), np.asarray(grad, dtype=float), np.asarray(hess, dtype=float),
-                float(phi_t), np.asarray(grad_t, dtype=float), float(phi_tt))
+        """(phi, grad (3,), hess (3, 3), phi_t, grad_t (3,), phi_tt) at world point p (3,)
+        m and time t s; ConstraintError when any of them is not finite."""
+        try:
+            v = self._fast(float(p[0]), float(p[1]), float(p[2]), float(t))
+            ok = math.isfinite(sum(v))     # TypeError: complex (a negative to a real power)
+        except (ArithmeticError, ValueError, TypeError):
+            ok = False
+        if ok:
+            v = np.array(v, dtype=float)
+        else:
+            v = self._values(p, t)
+            if not np.isfinite(v).all():
+                raise ConstraintError(
+                    f"constraint {self.name!r}: phi = {self.expr} on frame {self.frame!r} is "
+                    f"not finite at t = {float(t):.6g} s, {checks.format_point(p)}: "
+                    f"{self.non_finite_terms(p, t)}{checks.why_not_finite(self.expr, (*p, t))}"
+                    "; the GPME needs phi and its first and second derivatives finite along "
+                    "the motion")
+        return float(v[0]), v[1:4], v[4:13].reshape(3, 3), float(v[13]), v[14:17], float(v[17])
+
+    def non_finite_terms(self, p, t) -> str:
+        """'' when every local term at (p, t) is finite, else which are not, e.g.
+        'phi = nan, grad[x] = nan, Hessian[x, x] = nan' (p (3,) m, t s)."""
+        try:
+            v = self._values(p, t, raise_errors=True)
+        except (ArithmeticError, ValueError, TypeError) as exc:
+            return "the evaluation raised " + checks.evaluation_failure(exc)
+        return checks.non_finite_text(_TERM_NAMES, v)
+
+    def _values(self, p, t, raise_errors=False):
+        """The 18 local terms (flat, _TERM_NAMES) by numpy in float64, NaN where not
+        finite (or everywhere when evaluating raises)."""
+        with np.errstate(all="ignore"):
+            try:
+                return np.array(self._careful(_F64(p[0]), _F64(p[1]), _F64(p[2]), _F64(t)),
+                                dtype=float)
+            except (ArithmeticError, ValueError, TypeError):
+                if raise_errors:
+                    raise
+                return np.full(len(_TERM_NAMES), np.nan)
 
 
 class _BoundPointConstraint:
@@ -133,6 +199,13 @@ class _BoundPointConstraint:
         p_dot = pk.velocity
         phi_dot = float(grad @ p_dot) + phi_t
         kappa = float(grad @ pk.drift + p_dot @ (hess @ p_dot) + 2.0 * (grad_t @ p_dot) + phi_tt)
+        if not (math.isfinite(phi) and math.isfinite(phi_dot) and math.isfinite(kappa)):
+            # a PointConstraint subclass of the user's (SymPy ones raise in local_terms)
+            raise ConstraintError(
+                f"constraint {self.name!r} ({type(self.spec).__name__} on frame "
+                f"{self.spec.frame!r}) is not finite at t = {float(t):.6g} s, "
+                f"{checks.format_point(pk.position)}: Phi = {phi:g}, Phi_dot = {phi_dot:g}, "
+                f"kappa = {kappa:g}; its local_terms must be finite along the motion")
         return phi, row, phi_dot, kappa
 
 
@@ -159,9 +232,26 @@ class _BoundJointProgramme:
         self.row[k] = 1.0
 
     def evaluate(self, t, kin, q_dot, point=None):
-        f = self.spec.function
-        return (float(kin.q[self.k]) - f.value(t), self.row, float(q_dot[self.k]) - f.rate(t),
-                -f.acceleration(t))
+        q = float(kin.q[self.k])
+        c = self.spec.coordinate
+        f, f_t, f_tt = _time_derivatives(
+            self.spec.function, t,
+            lambda: f"programme {self.name!r} ({c} = f(t), at {c} = {q:.6g})")
+        return q - f, self.row, float(q_dot[self.k]) - f_t, -f_tt
+
+
+def _time_derivatives(function, t, label):
+    """(f, f', f'') of a TimeFunction at t s, all finite, else ConstraintError starting
+    with ``label()`` (the programme and the state; built only for the message)."""
+    try:
+        f, f_t, f_tt = function.derivatives(t)
+    except ConstraintError as exc:       # a SympyTimeFunction names what is not finite
+        raise ConstraintError(f"{label()}: {exc}") from None
+    if not (math.isfinite(f) and math.isfinite(f_t) and math.isfinite(f_tt)):
+        raise ConstraintError(f"{label()}: the time function {function!r} is not finite at "
+                              f"t = {float(t):.6g} s: f = {f:g}, f' = {f_t:g}, f'' = {f_tt:g}; "
+                              "a programme needs f, f' and f'' finite along the motion")
+    return f, f_t, f_tt
 
 
 def bind_constraints(model, constraints):

@@ -16,7 +16,8 @@ from typing import Optional
 
 import numpy as np
 
-from .errors import ModelError
+from . import expression_checks as checks
+from .errors import ConstraintError, ModelError
 
 
 class TimeFunction:
@@ -33,6 +34,10 @@ class TimeFunction:
 
     def acceleration(self, t: float) -> float:
         raise NotImplementedError
+
+    def derivatives(self, t: float) -> tuple:
+        """(value, rate, acceleration) at t s (one call: what a programme needs)."""
+        return self.value(t), self.rate(t), self.acceleration(t)
 
 
 def _is_real(v) -> bool:
@@ -272,45 +277,91 @@ def _natural_spline(t, y):
     return coef
 
 
+_ORDER_NAMES = ("f", "f'", "f''")
+
+
 class SympyTimeFunction(TimeFunction):
     """f(t) from a SymPy expression in the symbol ``t`` (s); derivatives generated once.
 
     expr     : a SymPy expression, or a string read by ``sympy.sympify`` (code you
                trust; gpme_io.modelfile parses a model file's strings without eval and
                passes the expression here)
-    t_symbol : the time symbol (default ``Symbol('t')``)
+    t_symbol : the time symbol (default ``Symbol('t')``; a symbol named like it with other
+               assumptions is taken as it)
+    name     : optional, names the function in messages
 
-    Any other symbol is an error (ModelError naming it).  ``expr`` keeps the expression.
+    The expression is checked first (gpme_core.expression_checks): one ModelError lists
+    every problem (not an expression, other symbols, undefined functions, constants that
+    are not finite reals, functions without a second derivative such as Abs, sign,
+    Heaviside, Piecewise, Max, and anything Python's math module or numpy cannot
+    evaluate).  ``expr`` keeps the expression.  value, rate, acceleration and derivatives
+    raise a ConstraintError naming the function, t and which of f, f', f'' is not finite
+    (a pole, a square root or logarithm out of its domain, an overflow); they never warn or
+    divide by a Python zero.
     """
 
-    def __init__(self, expr, t_symbol: Optional[object] = None):
+    def __init__(self, expr, t_symbol: Optional[object] = None, name: Optional[str] = None):
         import sympy as sp
         t_sym = t_symbol if t_symbol is not None else sp.Symbol("t")
-        try:
-            parsed = sp.sympify(expr)
-        except (sp.SympifyError, TypeError, SyntaxError) as exc:
-            raise ModelError(f"SympyTimeFunction: cannot read {expr!r} as a SymPy expression "
-                             f"({exc})") from None
-        if not isinstance(parsed, sp.Expr):
-            raise ModelError(f"SympyTimeFunction: {expr!r} is not a scalar expression in t "
-                             f"(got a {type(parsed).__name__})")
-        unknown = parsed.free_symbols - {t_sym}
-        if unknown:
-            raise ModelError(f"SympyTimeFunction: expression {str(parsed)!r} uses "
-                             f"{sorted(map(str, unknown))}; only the time {t_sym} (s) is "
-                             "allowed")
+        label = f"time function {name!r}" if name is not None else "SympyTimeFunction"
+        parsed, problems = checks.read_expression(expr, {"t": t_sym}, label,
+                                                  f"the time {t_sym} (s)")
+        _raise(problems)
+        derivs = [parsed, sp.diff(parsed, t_sym), sp.diff(parsed, t_sym, 2)]
+        fns, problems = checks.compile_expressions((t_sym,), derivs, label, parsed)
+        _raise(problems)
         self.expr = parsed
         self.t_symbol = t_sym
-        self._f = [sp.lambdify(t_sym, sp.diff(parsed, t_sym, k), "numpy") for k in range(3)]
+        self.name = name
+        self._fast, self._careful = fns["math"], fns["numpy"]
+        self._fast_order = [sp.lambdify(t_sym, d, "math") for d in derivs]
+
+    def _order(self, k, t):
+        try:
+            v = self._fast_order[k](float(t))
+            if math.isfinite(v):           # TypeError: complex (a negative to a real power)
+                return float(v)
+        except (ArithmeticError, ValueError, TypeError):
+            pass
+        raise self._not_finite(t, {k: self._values(t)[k]})
 
     def value(self, t):
-        return float(self._f[0](t))
+        return self._order(0, t)
 
     def rate(self, t):
-        return float(self._f[1](t))
+        return self._order(1, t)
 
     def acceleration(self, t):
-        return float(self._f[2](t))
+        return self._order(2, t)
+
+    def derivatives(self, t):
+        try:
+            f, f_t, f_tt = self._fast(float(t))
+            if math.isfinite(f + f_t + f_tt):
+                return float(f), float(f_t), float(f_tt)
+        except (ArithmeticError, ValueError, TypeError):
+            pass
+        v = self._values(t)
+        if not np.isfinite(v).all():
+            raise self._not_finite(t, dict(enumerate(v)))
+        return float(v[0]), float(v[1]), float(v[2])     # finite, only their sum overflowed
+
+    def _values(self, t):
+        """(f, f', f'') by numpy in float64, NaN where not finite or evaluating raises."""
+        with np.errstate(all="ignore"):
+            try:
+                return np.array(self._careful(np.float64(t)), dtype=float)
+            except (ArithmeticError, ValueError, TypeError):
+                return np.full(3, np.nan)
+
+    def _not_finite(self, t, values):
+        shown = ", ".join(f"{_ORDER_NAMES[k]} = {v:g}" for k, v in values.items()
+                          if not math.isfinite(v))
+        who = f"time function {self.name!r}" if self.name is not None else "time function"
+        return ConstraintError(
+            f"{who} f(t) = {self.expr} is not finite at t = {float(t):.6g} s: {shown}"
+            f"{checks.why_not_finite(self.expr, (t,))}; a programme or drive needs f, f' and "
+            "f'' finite over the run")
 
     def __repr__(self):
         return f"SympyTimeFunction({str(self.expr)!r})"

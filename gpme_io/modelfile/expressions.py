@@ -10,7 +10,8 @@ sign, Heaviside, Piecewise, Max/Min, floor, ...) are refused with the reason: th
 needs the second derivative of every constraint and programme (kappa, the programmed
 acceleration).  Functions smooth only on part of the line (sqrt, log, division, ...)
 are accepted; :func:`singular_sets` names where they are not smooth, for the message
-given when an expression is not finite at the initial state.
+given when an expression is not finite at the initial state.  The refused functions, their
+reasons and singular_sets are gpme_core.expression_checks', shared with the Python API.
 """
 import ast
 import difflib
@@ -18,6 +19,8 @@ import math
 from typing import Mapping, Optional
 
 import sympy as sp
+
+from gpme_core import expression_checks as checks
 
 # name in the file -> (SymPy function, number of arguments)
 FUNCTIONS = {
@@ -28,24 +31,11 @@ FUNCTIONS = {
     "exp": (sp.exp, 1), "log": (sp.log, 1), "sqrt": (sp.sqrt, 1),
 }
 CONSTANTS = {"pi": sp.pi, "E": sp.E}
-_SMOOTH_HINT = ("the GPME needs the second derivative of every constraint and programme "
-                "(kappa, the programmed acceleration); write a smooth form")
-NON_SMOOTH = {
-    "abs": "its derivative jumps where its argument is 0 (use e.g. sqrt(u**2 + eps**2))",
-    "Abs": "its derivative jumps where its argument is 0 (use e.g. sqrt(u**2 + eps**2))",
-    "sign": "it jumps at 0", "sgn": "it jumps at 0", "Heaviside": "it jumps at 0",
-    "DiracDelta": "it is a distribution, not a function",
-    "Piecewise": "its pieces meet without a continuous second derivative",
-    "Max": "it has a kink where its arguments are equal",
-    "Min": "it has a kink where its arguments are equal",
-    "max": "it has a kink where its arguments are equal",
-    "min": "it has a kink where its arguments are equal",
-    "floor": "it jumps at every integer", "ceiling": "it jumps at every integer",
-    "ceil": "it jumps at every integer", "round": "it jumps at every half-integer",
-    "frac": "it jumps at every integer", "Mod": "it jumps at every multiple of its modulus",
-}
-_NON_SMOOTH_TYPES = (sp.Abs, sp.sign, sp.Heaviside, sp.DiracDelta, sp.Piecewise, sp.Max,
-                     sp.Min, sp.floor, sp.ceiling, sp.frac, sp.Mod)
+# the functions refused and why, and where the accepted ones are not smooth: one table with
+# the Python API (gpme_core.constraints.SympyPointConstraint, time_functions.SympyTimeFunction)
+_SMOOTH_HINT = checks.SMOOTH_HINT
+NON_SMOOTH = checks.NON_SMOOTH
+singular_sets = checks.singular_sets
 MAX_LENGTH = 5000          # characters; longer text is refused before parsing
 
 
@@ -93,13 +83,10 @@ def parse_expression(text: object, symbols: Mapping[str, str]) -> tuple:
     except RecursionError:
         return None, [f"{text!r}: nested too deeply"]
     problems = []
-    bad = sorted({type(a).__name__ for a in expr.atoms(*_NON_SMOOTH_TYPES)})
+    bad = sorted({type(a).__name__ for a, _ in checks.non_smooth_parts(expr)})
     if bad:
         problems.append(f"{text!r} becomes {bad} in SymPy, which is not smooth; {_SMOOTH_HINT}")
-    if expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
-        problems.append(f"{text!r} is infinite or undefined ({expr})")
-    elif expr.has(sp.I):
-        problems.append(f"{text!r} is complex ({expr}); constraints and programmes are real")
+    problems += checks.constant_problems(expr, f"{text!r} = {expr}")
     return (None if problems else expr), problems
 
 
@@ -177,42 +164,6 @@ def _op_text(op: ast.AST) -> str:
 def _did_you_mean(name: str, choices: list) -> str:
     close = difflib.get_close_matches(name, choices, n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-def singular_sets(expr: sp.Expr) -> list:
-    """Where the parts of ``expr`` that are smooth only on part of the line are not:
-    e.g. ['sqrt: where x**2 - 1 <= 0', 'division: where x - 2 = 0']."""
-    out = []
-    for sub in sp.preorder_traversal(expr):
-        if isinstance(sub, sp.Pow):
-            base, e = sub.args
-            if base.is_number:
-                continue
-            if not e.is_number:
-                out.append(f"power: where {base} <= 0")
-            elif e.is_integer:
-                if e.is_negative:
-                    out.append(f"division: where {base} = 0")
-            elif e == sp.Rational(1, 2):
-                out.append(f"sqrt: where {base} <= 0")
-            elif e == sp.Rational(-1, 2):
-                out.append(f"1/sqrt: where {base} <= 0")
-            else:
-                out.append(f"power {e}: where {base} <= 0")
-        elif isinstance(sub, sp.log):
-            out.append(f"log: where {sub.args[0]} <= 0")
-        elif isinstance(sub, (sp.asin, sp.acos)):
-            out.append(f"{type(sub).__name__}: where |{sub.args[0]}| >= 1")
-        elif isinstance(sub, sp.atanh):
-            out.append(f"atanh: where |{sub.args[0]}| >= 1")
-        elif isinstance(sub, sp.acosh):
-            out.append(f"acosh: where {sub.args[0]} <= 1")
-        elif isinstance(sub, sp.tan):
-            out.append(f"tan: where cos({sub.args[0]}) = 0")
-        elif isinstance(sub, sp.atan2):
-            out.append(f"atan2: where {sub.args[0]} = {sub.args[1]} = 0")
-    seen: dict = {}
-    return [seen.setdefault(s, s) for s in out if s not in seen]
 
 
 def depends_on(expr: sp.Expr, names) -> bool:
