@@ -5,11 +5,17 @@ the given model file (parameters are paths into it, gpme_study.model_paths).
 
 Imports only argparse at module level, so building the `gpme` parser stays fast.
 """
+import os
+import re
 import sys
 
 RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
              "output_dt": "output_dt", "dt": "dt", "min_frequency": "min_frequency_hz",
              "phi_tolerance": "phi_tolerance"}
+# the keys of the sweep description other options set: {attribute: key}
+OTHER_FLAGS = {"plot_x": "plot.x", "plot_y": "plot.y"}
+# most local worker processes per core (more only trade memory for nothing)
+MAX_WORKERS_PER_CORE = 4
 
 
 def add_arguments(parser):
@@ -62,6 +68,9 @@ def add_arguments(parser):
                              "(tiny sweeps, debugging)")
     parser.add_argument("--retry-errors", action="store_true",
                         help="recompute stored points whose status is 'error'")
+    parser.add_argument("--force", action="store_true",
+                        help="run even when the estimate is above the limits (2 h wall "
+                             "time, 2 GB written, 2 GB of history per run in memory)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser
 
@@ -119,8 +128,13 @@ def spec_dict(args, problems):
         plot["y"] = args.plot_y
     if plot:
         data["plot"] = plot
+    cores = os.cpu_count() or 1
     if args.workers is not None and args.workers < 1:
         problems.append(f"--workers must be >= 1, got {args.workers}")
+    elif args.workers is not None and args.workers > MAX_WORKERS_PER_CORE * cores:
+        problems.append(f"--workers {args.workers}: at most {MAX_WORKERS_PER_CORE} x the "
+                        f"{cores} cores of this machine ({MAX_WORKERS_PER_CORE * cores}); "
+                        "a larger cluster is given with --scheduler")
     if args.workers is not None and args.scheduler:
         problems.append("--workers sizes the local cluster; it cannot be used with --scheduler")
     if getattr(args, "in_process", False) and (args.scheduler or args.workers is not None):
@@ -129,31 +143,123 @@ def spec_dict(args, problems):
     return data
 
 
+def out_dir_problem(out):
+    """Why ``out`` cannot be the sweep's output directory (None when it can), found
+    without creating anything: an empty name, an existing file, a file on the way, a
+    folder that cannot be written (a temporary file is tried in it or in the nearest
+    existing folder above it)."""
+    import tempfile
+    from pathlib import Path
+    text = str(out)
+    if not text.strip():
+        return "--out is empty; give the output directory, e.g. reports/sweep"
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        return (f"--out {text!r} exists and is not a directory; give a directory (a new one, "
+                "or a sweep's earlier --out to resume it)")
+    for sub in ("points", "plots"):
+        if (path / sub).exists() and not (path / sub).is_dir():
+            return f"--out {text!r}: {str(path / sub)!r} exists and is not a directory"
+    probe = path
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        return (f"--out {text!r} cannot be created: {str(probe)!r} on its way is a file, "
+                "not a directory")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        what = "written" if probe == path else f"created in {str(probe)!r}"
+        return (f"--out {text!r} cannot be {what} ({exc.strerror or exc}); give a "
+                "directory you can write")
+    return None
+
+
+def _name_flags(problems, args):
+    """The problems with the option that set a key named next to it: 'run.t_end' ->
+    'run.t_end (--t-end)'."""
+    keys = {f"run.{key}": attr for attr, key in RUN_FLAGS.items()}
+    keys.update({key: attr for attr, key in OTHER_FLAGS.items()})
+    given = {key: "--" + attr.replace("_", "-") for key, attr in keys.items()
+             if getattr(args, attr, None) is not None}
+    out = []
+    for p in problems:
+        for key, flag in given.items():
+            # 'run.dt (0.01 s)' -> 'run.dt (--dt, 0.01 s)'; 'run.dt must' -> 'run.dt (--dt) must'
+            p = re.sub(rf"(?<![\w.]){re.escape(key)}(?![\w.])( \()?",
+                       lambda m, k=key, f=flag: f"{k} ({f}, " if m.group(1) else f"{k} ({f})",
+                       p, count=1)
+        out.append(p)
+    return out
+
+
 def main(args):
     """Run `gpme sweep`; exit status 0, 1 if a point failed unexpectedly (status 'error'),
-    2 for an invalid sweep description."""
-    from gpme_core.atomic import atomic_write_text
-
-    from .plots import write_plots
-    from .runner import run_sweep
+    2 for an invalid sweep description, an unusable --out or --scheduler, or a sweep
+    whose estimate is above the limits of gpme_study.cost (without --force)."""
     from .spec import SweepSpecError, spec_from_dict
     problems = []
+    out_problem = out_dir_problem(args.out)
+    if out_problem:
+        problems.append(out_problem)
+    spec, data = None, None
     try:
         data = spec_dict(args, problems)
         spec = spec_from_dict(data)
     except SweepSpecError as exc:
-        problems += exc.problems
+        problems += _name_flags(exc.problems, args)
+    client = None
+    if args.scheduler and not getattr(args, "in_process", False) and args.workers is None:
+        from .runner import connect
+        client, problem = connect(args.scheduler)
+        if problem:
+            problems.append(problem)
     if problems:
+        if client is not None:
+            client.close()
         print(f"error: {SweepSpecError(problems)}", file=sys.stderr)
         return 2
+    try:
+        return _run(args, spec, data, client)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _run(args, spec, data, client):
     import json
     from pathlib import Path
+
+    from gpme_core.atomic import atomic_write_text
+
+    from .cost import estimate
+    from .plots import write_plots
+    from .runner import pending_points, run_sweep
     out = Path(args.out)
+    in_process = getattr(args, "in_process", False)
+    report = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    _, pending = pending_points(spec, out, args.retry_errors)
+    if in_process:
+        workers = 1
+    elif client is not None:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+    else:
+        workers = args.workers or os.cpu_count() or 1
+    cost = estimate(spec, list(pending.values()), workers,
+                    dask=bool(pending) and not in_process, report=report)
+    report(cost.summary())
+    over = cost.problems()
+    if over and not args.force:
+        from .spec import SweepSpecError
+        print(f"error: {SweepSpecError(over)}", file=sys.stderr)
+        return 2
+    for line in over:
+        report(f"--force given, running although {line}")
     atomic_write_text(out / "sweep_spec.json", json.dumps(data, indent=1, default=str))
-    report = None if args.quiet else (lambda line: print(line, flush=True))
     table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
-                      retry_errors=args.retry_errors, report=report,
-                      in_process=getattr(args, "in_process", False))
+                      retry_errors=args.retry_errors, report=report, in_process=in_process,
+                      client=client, terminal=sys.stdout.isatty())
     if spec.model is None:
         paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
     else:

@@ -30,8 +30,8 @@ from pathlib import Path
 from typing import Optional
 
 from .model_paths import PathError, read_model_document
-from .spec import (MAX_POINTS, MODES, SweepSpec, SweepSpecError, _grid_points, _lhs_points,
-                   _limits, _list_points, _number, _plot_axes, _swept)
+from .spec import (MODES, SweepSpec, SweepSpecError, _grid_points, _lhs_points, _limits,
+                   _list_points, _number, _plot_axes, _swept, fill_defaults)
 
 MODEL_TOP_KEYS = ("model", "mode", "parameters", "points", "samples", "seed", "run", "limits",
                   "plot")
@@ -97,10 +97,15 @@ class ModelSpace:
         try:
             self.document.coerce(name, value)
         except (ValueError, TypeError) as exc:
-            problems.append(f"{where}: {name}: {exc}")
+            named = where if where.endswith(name) else f"{where}: {name}"
+            problems.append(f"{named}: {exc}")
 
     def is_integer(self, name):
         return isinstance(self.document.coerce(name, self.document.value(name)), int)
+
+    def default(self, name):
+        """The value a point that does not name ``name`` runs with: the file's."""
+        return self.document.coerce(name, self.document.value(name))
 
 
 def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
@@ -147,9 +152,7 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
     for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
         if key in data and mode != wanted:
             problems.append(f"{key!r} is only used with mode {wanted!r} (mode is {mode!r})")
-    for k, pt in enumerate(points):
-        for name, value in pt.items():
-            space.check(name, value, f"point {k}", problems)
+    fill_defaults(points, space)
     swept = _swept(points)
     for key in ("t_end", "dt", "output_dt"):
         if getattr(run, key) is not None and f"run.{key}" in swept:
@@ -158,11 +161,11 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
     columns = {}
     if not problems:
         columns = _base_columns(document, run, problems)
+    if not problems:
+        _value_problems(document, points, run, mode, problems)
     limits = _limits(data.get("limits") or {}, problems, columns) if columns else {}
     plot = data.get("plot") or {}
     plot_x, plot_y = _plot_axes(plot, swept, problems, space)
-    if len(points) > MAX_POINTS:
-        problems.append(f"{len(points)} points; at most {MAX_POINTS} (check the grid)")
     if problems:
         raise SweepSpecError(problems)
     points = [{name: document.coerce(name, v) for name, v in pt.items()} for pt in points]
@@ -204,6 +207,43 @@ def _model_run_settings(run, problems) -> ModelRunSettings:
         problems.append(f"run.transient ({tr:g} s) must be shorter than run.t_end "
                         f"({t_end:g} s): the |Phi| metrics after the transient need data")
     return ModelRunSettings(**values)
+
+
+# at most this many single values are checked by the model-file loader before a sweep (a
+# check is 3-7 ms); beyond it a refused value is a point with status "invalid"
+MAX_CHECKED_VALUES = 2000
+
+
+def _value_problems(document, points, run, mode, problems):
+    """Check every value a sweep sets with the model-file loader before any run: each
+    distinct (parameter, value) alone in the file (a grid's axis values, a list's values,
+    a Latin hypercube's range ends), with the sweep's run settings written in; and the
+    RK4 step against the output spacing (run.dt <= run.output_dt).  A value refused only
+    in combination with another one stays a point with status "invalid"."""
+    from gpme_io.modelfile.load import parse_model_data
+    if mode == "lhs":
+        values = {}
+        for name in points[0] if points else ():
+            col = [pt[name] for pt in points]
+            values.update({(name, min(col)): None, (name, max(col)): None})
+    else:
+        values = {(name, v): None for pt in points for name, v in pt.items()}
+    singles = [{}] + [{name: v} for name, v in list(values)[:MAX_CHECKED_VALUES]]
+    of_the_file = set()         # problems of the file itself: listed once, not per value
+    for single in singles:
+        data = run.apply(document.with_values(single))
+        spec, found = parse_model_data(data, document.path)
+        r = getattr(spec, "run", None)
+        if not found and r is not None and r.integrator == "RK4" and r.dt is not None \
+                and r.dt > r.output_dt:
+            found = found + [f"run.dt ({r.dt:g} s) must not exceed run.output_dt "
+                             f"({r.output_dt:g} s): output_dt >= dt"]
+        if not single:
+            of_the_file.update(found)
+            problems += [f"the model file with the sweep's [run]: {p}" for p in found]
+            continue
+        where = ", ".join(f"parameters.{k} = {v!r}" for k, v in single.items())
+        problems += [f"{where}: {p}" for p in found if p not in of_the_file]
 
 
 def _base_columns(document, run, problems) -> dict:

@@ -185,11 +185,18 @@ def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS, uni
                 parameters=None):
     """heatmap_<metric>.png for each metric with a finite value and safe_region.png (when
     limits are given) into <out_dir>/plots; returns {name: path}.  Needs two swept axes."""
-    if x is None or y is None or table.empty:
+    if x is None or y is None or table.empty or x not in table or y not in table:
+        return {}
+    table = pd.DataFrame(table)
+    # every point has both axes (a list's points are completed with the defaults,
+    # gpme_study.spec.fill_defaults); a row without one could not be placed on the map
+    placed = pd.to_numeric(table[x], errors="coerce").notna() & \
+        pd.to_numeric(table[y], errors="coerce").notna()
+    table = table[placed]
+    if table.empty:
         return {}
     out = Path(out_dir) / "plots"
     paths = {}
-    table = pd.DataFrame(table)
     for metric in metrics:
         if metric in table and pd.to_numeric(table[metric], errors="coerce").notna().any():
             name = f"heatmap_{file_stem(metric)}.png"

@@ -11,6 +11,7 @@ stopped; a point that fails is a row with its status and error, never a stopped 
 """
 import json
 import logging
+import math
 import os
 import time
 from pathlib import Path
@@ -18,9 +19,18 @@ from pathlib import Path
 import pandas as pd
 
 from gpme_core.atomic import atomic_write_bytes, atomic_write_text
+from gpme_core.errors import GpmeError
 
 from .point import point_key, run_point
 from .store import ResultStore
+
+
+# s, how long a given --scheduler has to answer
+CONNECT_TIMEOUT_S = 10.0
+# progress lines of a sweep whose output is not a terminal (a log): about this many
+MAX_LOG_LINES = 20
+TABLE_CSV = "results.csv"
+TABLE_PARQUET = "results.parquet"
 
 
 def point_job(spec):
@@ -31,24 +41,9 @@ def point_job(spec):
     from .model_point import model_point_key, run_model_point
     return model_point_key, run_model_point, (spec.model,)
 
-TABLE_CSV = "results.csv"
-TABLE_PARQUET = "results.parquet"
-
-
-def _client(scheduler, n_workers):
-    from dask.distributed import Client, LocalCluster
-    if scheduler:
-        return Client(scheduler)
-    cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, dashboard_address=":0",
-                           silence_logs=logging.ERROR)
-    client = Client(cluster)
-    client._gpme_own_cluster = cluster     # closed with the client in run_sweep
-    return client
-
 
 def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
-              report=print, in_process=False):
+              report=print, in_process=False, client=None, terminal=True):
     """Run every point of ``spec`` (a gpme_study.spec.SweepSpec) not yet in ``out_dir``.
 
     scheduler    : address of an existing Dask scheduler, or None for a local cluster
@@ -57,33 +52,50 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
                    e.g. a lost worker; 'infeasible', 'diverged', 'invalid' are kept)
     report       : callable taking one progress line (str), or None
     in_process   : run the points here, one after another, without Dask
+    client       : a connected Dask client to use instead of ``scheduler`` (closed here)
+    terminal     : progress for a terminal (a line per point) or for a log (at most
+                   about MAX_LOG_LINES lines; see PointProgress)
     Returns the table (one row per point, in spec order; see gpme_study.point.run_point)
     and writes it as <out_dir>/results.csv and results.parquet; df.attrs holds the counts
     and the wall time of this call.
+
+    Every finished point is stored at once, atomically (gpme_study.store).  An
+    interruption (KeyboardInterrupt, or gpme.cli.Terminated for SIGTERM) propagates at
+    once: the points stored so far and any earlier table stay whole (every file is
+    written to a temporary file in its folder and moved into place), the cluster is closed.
     """
     out = Path(out_dir)
     store = ResultStore(out)
     report = report or (lambda line: None)
-    key_of, run, args = point_job(spec)
-    keys = [key_of(*args, p, spec.run) for p in spec.points]
-    pending = {}
-    for key, point in zip(keys, spec.points):
-        row = store.load(key)
-        if row is None or (retry_errors and row.get("status") == "error"):
-            pending.setdefault(key, point)
+    _, run, args = point_job(spec)
+    keys, pending = pending_points(spec, out, retry_errors)
     n_cached = len(set(keys)) - len(pending)
     report(f"{len(spec.points)} points ({len(set(keys))} distinct): {n_cached} already done, "
            f"{len(pending)} to run")
     start = time.perf_counter()
     n_workers_used = 0
-    if pending and in_process:
-        n_workers_used = 0
-        for done, (key, point) in enumerate(pending.items(), 1):
+    progress = PointProgress(report, len(pending), terminal)
+    if not pending or in_process:
+        if client is not None:
+            client.close()
+        for key, point in pending.items():
             row = run(*args, point, spec.run)
             store.save(row)
-            _report_point(report, done, len(pending), key, row)
-    elif pending:
-        n_workers_used = _compute(pending, spec, store, scheduler, n_workers, report)
+            progress.point(key, row)
+    else:
+        if client is None and scheduler:
+            client, problem = connect(scheduler)
+            if client is None:
+                raise SweepRunError(problem)
+        elif client is None:
+            client = _local_client(n_workers)
+        try:
+            n_workers_used = _compute(pending, spec, store, client, progress, report)
+        finally:
+            cluster = getattr(client, "_gpme_own_cluster", None)
+            client.close()
+            if cluster is not None:
+                cluster.close()
     wall = time.perf_counter() - start
     table = assemble_table(spec, keys, store)
     table.attrs.update(points=len(spec.points), computed=len(pending), cached=n_cached,
@@ -93,38 +105,114 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     return table
 
 
-def _report_point(report, done, total, key, row):
-    report(f"[{done}/{total}] {key} {row['status']}"
-           + (f" {row.get('wall_time_s', float('nan')):.1f} s" if row["status"] == "ok"
-              else f": {row['error'][:120]}"))
+class SweepRunError(GpmeError):
+    """The sweep cannot run where it was asked to (a scheduler that does not answer)."""
 
 
-def _compute(pending, spec, store, scheduler, n_workers, report):
+def connect(scheduler, timeout_s=CONNECT_TIMEOUT_S):
+    """(Dask client, None) of the scheduler at ``scheduler``, or (None, problem) when it
+    cannot be reached: a bad address, or no scheduler answering within ``timeout_s``."""
+    from dask.distributed import Client
+    try:
+        return Client(scheduler, timeout=f"{timeout_s:g}s"), None
+    except (OSError, ValueError, TypeError, TimeoutError) as exc:
+        return None, (f"--scheduler {scheduler!r} cannot be reached within {timeout_s:g} s "
+                      f"({type(exc).__name__}: {exc}); give the address of a running "
+                      "Dask scheduler (tcp://host:8786), or leave --scheduler out for a "
+                      "local cluster")
+
+
+def _local_client(n_workers):
+    from dask.distributed import Client, LocalCluster
+    cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
+                           processes=True, dashboard_address=":0",
+                           silence_logs=logging.ERROR)
+    client = Client(cluster)
+    client._gpme_own_cluster = cluster     # closed with the client in run_sweep
+    return client
+
+
+def pending_points(spec, out_dir, retry_errors=False):
+    """(keys of every point in spec order, {key: point} of those not stored in ``out_dir``
+    yet, or stored with status 'error' when ``retry_errors``)."""
+    store = ResultStore(out_dir)
+    key_of, _, args = point_job(spec)
+    keys = [key_of(*args, p, spec.run) for p in spec.points]
+    pending = {}
+    for key, point in zip(keys, spec.points):
+        if key in pending:
+            continue
+        row = store.load(key)
+        if row is None or (retry_errors and row.get("status") == "error"):
+            pending[key] = point
+    return keys, pending
+
+
+class PointProgress:
+    """Progress lines of the points.  On a terminal, one per finished point; elsewhere (a
+    log, a pipe) at most about MAX_LOG_LINES: every ceil(n / MAX_LOG_LINES)-th point and
+    the last, with the counts by status.  Each line gives the time left at the rate
+    measured so far, from the first point on (the kernels are compiled or loaded before,
+    gpme_study.cost and _warm_up_worker, and said so)."""
+
+    def __init__(self, report, total, terminal=True):
+        self.report, self.total = report, total
+        self.every = 1 if terminal else max(1, math.ceil(total / MAX_LOG_LINES))
+        self.start = time.perf_counter()
+        self.counts, self.done = {}, 0
+
+    def point(self, key, row):
+        """Count one finished point (its row) and report if it is a reporting one."""
+        self.done += 1
+        status = row.get("status", "error")
+        self.counts[status] = self.counts.get(status, 0) + 1
+        if self.done % self.every and self.done != self.total:
+            return
+        elapsed = time.perf_counter() - self.start
+        left = elapsed / self.done * (self.total - self.done)
+        timing = (f"; {elapsed:.0f} s elapsed, ~{left:.0f} s left" if self.done < self.total
+                  else f"; {elapsed:.0f} s")
+        if self.every == 1:
+            what = f"{key} {status}" + (
+                f" {row.get('wall_time_s', float('nan')):.1f} s" if status == "ok"
+                else f": {str(row.get('error', ''))[:120]}")
+        else:
+            what = ", ".join(f"{n} {s}" for s, n in sorted(self.counts.items()))
+        self.report(f"[{self.done}/{self.total}] {what}{timing}")
+
+
+def _warm_up_worker():
+    """Import gpme and compile the numba kernels (or load them from numba's on-disk
+    cache) on a Dask worker before its first point, so that point's time is its own."""
+    from gpme_examples.crane import CraneParameters, crane_system, initial_state
+    from gpme_study import model_point  # noqa: F401 - imported by a model file's points
+    params = CraneParameters()
+    system = crane_system(1, params)
+    system.solve(0.0, *initial_state(system.model, params))
+
+
+def _compute(pending, spec, store, client, progress, report):
     from dask.distributed import as_completed
     _, run, args = point_job(spec)
-    client = _client(scheduler, n_workers)
-    try:
-        n_workers_used = len(client.scheduler_info().get("workers", {}))
-        report(f"dask: {n_workers_used} workers at {client.scheduler.address}")
-        futures = {client.submit(run, *args, point, spec.run, key=f"gpme-point-{key}",
-                                 pure=False): key for key, point in pending.items()}
-        done = 0
-        for fut in as_completed(futures):
-            key = futures[fut]
-            try:
-                row = fut.result()
-            except Exception as exc:   # a lost worker or unpicklable result: record it
-                row = {"key": key, **pending[key], "status": "error", "failed_run": "",
-                       "error": f"{type(exc).__name__}: {exc}"}
-            store.save(row)
-            done += 1
-            _report_point(report, done, len(pending), key, row)
-    finally:
-        cluster = getattr(client, "_gpme_own_cluster", None)
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return n_workers_used
+    workers = len(client.scheduler_info().get("workers", {}))
+    report(f"dask: {workers} workers at {client.scheduler.address}; importing gpme and "
+           "compiling the numba kernels on each (first call) ...")
+    start = time.perf_counter()
+    client.run(_warm_up_worker)
+    report(f"  workers ready in {time.perf_counter() - start:.1f} s")
+    progress.start = time.perf_counter()
+    futures = {client.submit(run, *args, point, spec.run, key=f"gpme-point-{key}",
+                             pure=False): key for key, point in pending.items()}
+    for fut in as_completed(futures):
+        key = futures[fut]
+        try:
+            row = fut.result()
+        except Exception as exc:   # a lost worker or unpicklable result: record it
+            row = {"key": key, **pending[key], "status": "error", "failed_run": "",
+                   "error": f"{type(exc).__name__}: {exc}"}
+        store.save(row)
+        progress.point(key, row)
+    return workers
 
 
 def assemble_table(spec, keys, store):

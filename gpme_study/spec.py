@@ -35,6 +35,7 @@ that model file instead of the built-in crane: parameters are dotted paths into 
 and the run settings and metrics are generic (gpme_study.model_spec).
 """
 import dataclasses
+import difflib
 import itertools
 import json
 import math
@@ -80,6 +81,10 @@ TOP_KEYS = ("mode", "parameters", "points", "samples", "seed", "run", "limits", 
             "model")
 # more points than this is almost certainly a typo in a grid (hours of runs per point)
 MAX_POINTS = 100_000
+# most RFEM segments of the crane's arm: the RK4 step falls as 1 / n_rfe^2 (measured with
+# point.rk4_step: 3.3e-4 s at 1, 2.4e-7 s at 30, 1.4e-8 s at 100 segments, i.e. 7e7 steps
+# per simulated second), so more is never a sweep anyone can finish
+MAX_N_RFE = 100
 
 
 class SweepSpecError(ModelError):
@@ -207,10 +212,16 @@ def _grid_values(name, value, problems):
             if extra or len(value) != 3:
                 raise ValueError(f"expected keys start, stop, num, got {sorted(value)}")
             num = _number(value["num"])
-            if num != int(num) or num < 1:
+            if not math.isfinite(num) or num != int(num) or num < 1:
                 raise ValueError(f"num must be a positive integer, got {value['num']!r}")
-            return [float(v) for v in np.linspace(_number(value["start"]),
-                                                  _number(value["stop"]), int(num))]
+            if num > MAX_POINTS:
+                raise ValueError(f"num = {int(num)} values; at most {MAX_POINTS} (check the "
+                                 "grid)")
+            start, stop = _number(value["start"]), _number(value["stop"])
+            for key, v in (("start", start), ("stop", stop)):
+                if not math.isfinite(v):
+                    raise ValueError(f"{key} must be a finite number, got {value[key]!r}")
+            return [float(v) for v in np.linspace(start, stop, int(num))]
         if isinstance(value, (list, tuple)):
             if not value:
                 raise ValueError("empty list of values")
@@ -233,19 +244,30 @@ def _range(name, value, problems):
         if not isinstance(value, (list, tuple)) or len(value) != 2:
             raise ValueError(f"expected a range [low, high] or 'low:high', got {value!r}")
         lo, hi = _number(value[0]), _number(value[1])
-        if not lo <= hi:
-            raise ValueError(f"low must be <= high, got [{lo:g}, {hi:g}]")
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            raise ValueError(f"low and high must be finite numbers, got [{lo:g}, {hi:g}]")
+        if not lo < hi:
+            raise ValueError(f"low must be < high (a range to sample), got [{lo:g}, {hi:g}]; "
+                             "for one value use mode 'grid'")
         return lo, hi
     except (ValueError, TypeError) as exc:
         problems.append(f"parameters.{name}: {exc}")
         return None
 
 
+def _n_rfe_problem(value):
+    """'n_rfe must be ...' when ``value`` is not a valid number of RFEM segments, else None."""
+    if math.isfinite(value) and value == int(value) and 0 <= value <= MAX_N_RFE:
+        return None
+    return (f"n_rfe must be an integer from 0 to {MAX_N_RFE} (RFEM segments of the arm), "
+            f"got {value!r}")
+
+
 def _check_value(name, value, where, problems):
     unit, lo, inclusive = PARAMETERS[name]
     if name == "n_rfe":
-        if value != int(value) or value < 0:
-            problems.append(f"{where}: n_rfe must be an integer >= 0, got {value!r}")
+        if _n_rfe_problem(value):
+            problems.append(f"{where}: {_n_rfe_problem(value)}")
         return
     if not math.isfinite(value) or value < lo or (value == lo and not inclusive):
         rel = ">=" if inclusive else ">"
@@ -253,10 +275,21 @@ def _check_value(name, value, where, problems):
                         f"got {value!r}")
 
 
+def did_you_mean(name, valid):
+    """' (did you mean 'x', 'y'?)' for the names of ``valid`` close to ``name``, or ''."""
+    close = difflib.get_close_matches(str(name), list(valid), n=3, cutoff=0.6)
+    if not close:
+        lower = {v.lower(): v for v in valid}
+        close = [lower[m] for m in difflib.get_close_matches(str(name).lower(), list(lower),
+                                                             n=3, cutoff=0.6)]
+    return f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
+
+
 def _check_name(name, where, problems):
     c = canonical(name)
     if c not in PARAMETERS:
-        problems.append(f"{where}: unknown parameter {name!r}; valid: "
+        mean = did_you_mean(name, list(PARAMETERS) + list(ALIASES))
+        problems.append(f"{where}: unknown parameter {name!r}{mean}; valid: "
                         f"{sorted(PARAMETERS)} or aliases {sorted(ALIASES)}")
         return None
     return c
@@ -265,7 +298,7 @@ def _check_name(name, where, problems):
 class CraneSpace:
     """The parameters of the built-in crane sweep: CraneParameters fields and n_rfe.  A
     model-file sweep has its own space (gpme_study.model_spec.ModelSpace) with the same
-    three methods."""
+    four methods."""
 
     def name(self, name, where, problems):
         """The table name of parameter ``name``, or None (a problem is appended)."""
@@ -277,6 +310,11 @@ class CraneSpace:
 
     def is_integer(self, name):
         return name == "n_rfe"
+
+    def default(self, name):
+        """The value a point that does not name ``name`` runs with (n_rfe: None, the run's
+        n_rfe is filled in by spec_from_dict)."""
+        return None if name == "n_rfe" else float(default_value(name))
 
 
 CRANE = CraneSpace()
@@ -315,16 +353,13 @@ def spec_from_dict(data, base_dir=None):
     for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
         if key in data and mode != wanted:
             problems.append(f"{key!r} is only used with mode {wanted!r} (mode is {mode!r})")
-    for k, pt in enumerate(points):
-        for name, value in pt.items():
-            _check_value(name, value, f"point {k}", problems)
+    for pt in points:
         pt.setdefault("n_rfe", run.n_rfe)
+    fill_defaults(points, CRANE)
     swept = _swept(points)
     limits = _limits(data.get("limits") or {}, problems)
     plot = data.get("plot") or {}
     plot_x, plot_y = _plot_axes(plot, swept, problems)
-    if len(points) > MAX_POINTS:
-        problems.append(f"{len(points)} points; at most {MAX_POINTS} (check the grid)")
     if problems:
         raise SweepSpecError(problems)
     for pt in points:
@@ -346,33 +381,36 @@ def _run_settings(run, problems):
         except (ValueError, TypeError):
             problems.append(f"run.{key}: expected a number, got {value!r}")
     v = values
+    valid = {}
     for key in ("t_end", "output_dt", "phi_tolerance"):
-        if not (math.isfinite(v[key]) and v[key] > 0):
-            problems.append(f"run.{key} must be > 0, got {v[key]!r}")
+        valid[key] = math.isfinite(v[key]) and v[key] > 0
+        if not valid[key]:
+            problems.append(f"run.{key} must be finite and > 0, got {v[key]!r}")
     for key in ("transient", "dt", "min_frequency_hz"):
-        if not (math.isfinite(v[key]) and v[key] >= 0):
-            problems.append(f"run.{key} must be >= 0, got {v[key]!r}")
-    if not (v["n_rfe"] == int(v["n_rfe"]) and v["n_rfe"] >= 0):
-        problems.append(f"run.n_rfe must be an integer >= 0, got {v['n_rfe']!r}")
-    if math.isfinite(v["transient"]) and math.isfinite(v["t_end"]) and \
-            v["transient"] >= v["t_end"]:
+        valid[key] = math.isfinite(v[key]) and v[key] >= 0
+        if not valid[key]:
+            problems.append(f"run.{key} must be finite and >= 0, got {v[key]!r}")
+    n_rfe_problem = _n_rfe_problem(v["n_rfe"])
+    if n_rfe_problem:
+        problems.append(f"run.{n_rfe_problem}")
+    # the relations are checked only between valid values (no second message for one typo)
+    if valid["transient"] and valid["t_end"] and v["transient"] >= v["t_end"]:
         problems.append(f"run.transient ({v['transient']:g} s) must be shorter than run.t_end "
                         f"({v['t_end']:g} s): the metrics after the transient need data")
-    if math.isfinite(v["output_dt"]) and math.isfinite(v["t_end"]) and \
-            v["output_dt"] > 0.1 * v["t_end"]:
+    if valid["output_dt"] and valid["t_end"] and v["output_dt"] > 0.1 * v["t_end"]:
         problems.append(f"run.output_dt ({v['output_dt']:g} s) must be at most a tenth of "
                         f"run.t_end ({v['t_end']:g} s)")
-    if 0 < v["dt"] and math.isfinite(v["dt"]) and v["dt"] > v["output_dt"]:
+    if valid["dt"] and valid["output_dt"] and v["dt"] > v["output_dt"]:
         problems.append(f"run.dt ({v['dt']:g} s) must not exceed run.output_dt "
-                        f"({v['output_dt']:g} s)")
-    try:
+                        f"({v['output_dt']:g} s): output_dt >= dt (0 = per point)")
+    if not n_rfe_problem:
         v["n_rfe"] = int(v["n_rfe"])
-    except (ValueError, OverflowError):
-        pass
     return RunSettings(**v)
 
 
 def _grid_points(parameters, problems, space=CRANE):
+    """Points of a grid: the Cartesian product of the axes; every axis value is checked
+    once (``parameters.<name>``), the size before the product is built."""
     if not parameters:
         problems.append("mode 'grid' needs at least one parameter in 'parameters'")
         return []
@@ -383,22 +421,36 @@ def _grid_points(parameters, problems, space=CRANE):
             continue
         if c in axes:
             problems.append(f"parameters.{name}: {c} given twice")
-        axes[c] = _grid_values(name, value, problems)
+        values = _grid_values(name, value, problems)
+        n0 = len(problems)
+        for v in dict.fromkeys(values):
+            space.check(c, v, f"parameters.{name}", problems)
+        axes[c] = values if len(problems) == n0 else []
+    size = math.prod(len(v) for v in axes.values())
+    if size > MAX_POINTS:
+        problems.append(f"the grid has {' x '.join(str(len(v)) for v in axes.values())} = "
+                        f"{size} points; at most {MAX_POINTS} (check the grid)")
+        return []
     if not all(axes.values()) or not axes:
         return []
     names = list(axes)
     return [dict(zip(names, combo)) for combo in itertools.product(*axes.values())]
 
 
+def _whole_number(value):
+    return (not isinstance(value, bool) and isinstance(value, (int, float))
+            and math.isfinite(value) and value == int(value))
+
+
 def _lhs_points(parameters, samples, seed, problems, space=CRANE):
+    """Latin-hypercube points; each range's ends are checked as values of the parameter."""
     if not parameters:
         problems.append("mode 'lhs' needs at least one parameter range in 'parameters'")
-    if samples is None or isinstance(samples, bool) or not isinstance(samples, (int, float)) \
-            or samples != int(samples) or samples < 1:
-        problems.append(f"mode 'lhs' needs samples = a positive integer, got {samples!r}")
+    if samples is None or not _whole_number(samples) or not 1 <= samples <= MAX_POINTS:
+        problems.append(f"mode 'lhs' needs samples = an integer from 1 to {MAX_POINTS}, "
+                        f"got {samples!r}")
         samples = None
-    if isinstance(seed, bool) or not isinstance(seed, (int, float)) or seed != int(seed) \
-            or seed < 0:
+    if not _whole_number(seed) or seed < 0:
         problems.append(f"seed must be an integer >= 0, got {seed!r}")
         seed = None
     ranges = {}
@@ -407,7 +459,12 @@ def _lhs_points(parameters, samples, seed, problems, space=CRANE):
         if c is None:
             continue
         r = _range(name, value, problems)
-        if r is not None:
+        if r is None:
+            continue
+        n0 = len(problems)
+        for v in r:
+            space.check(c, v, f"parameters.{name}", problems)
+        if len(problems) == n0:
             ranges[c] = r
     if samples is None or seed is None or not ranges or len(ranges) != len(parameters):
         return []
@@ -427,8 +484,12 @@ def _lhs_points(parameters, samples, seed, problems, space=CRANE):
 
 
 def _list_points(points, problems, space=CRANE):
+    """The points of a list, each value checked (``point <k>``)."""
     if not isinstance(points, (list, tuple)) or not points:
         problems.append(f"mode 'list' needs points = a non-empty list of tables, got {points!r}")
+        return []
+    if len(points) > MAX_POINTS:
+        problems.append(f"{len(points)} points; at most {MAX_POINTS}")
         return []
     out = []
     for k, pt in enumerate(points):
@@ -440,12 +501,33 @@ def _list_points(points, problems, space=CRANE):
             c = space.name(name, f"point {k}", problems)
             if c is None:
                 continue
+            if c in clean:
+                problems.append(f"point {k}: {c} given twice")
             try:
                 clean[c] = _number(value)
             except (ValueError, TypeError):
                 problems.append(f"point {k}: {name} must be a number, got {value!r}")
+                continue
+            space.check(c, clean[c], f"point {k}", problems)
         out.append(clean)
     return out
+
+
+def fill_defaults(points, space):
+    """Give every point every parameter some point names (in place): a list sweep whose
+    points set different parameters runs each point at the default of what it does not
+    set (the crane's CraneParameters, a model file's own value), and the table and the
+    plots show those values.  Names without a default (None) are left as they are."""
+    names = []
+    for pt in points:
+        names += [nm for nm in pt if nm not in names]
+    for nm in names:
+        if any(nm not in pt for pt in points):
+            value = space.default(nm)
+            if value is not None:
+                for pt in points:
+                    pt.setdefault(nm, value)
+    return points
 
 
 def _swept(points):

@@ -53,7 +53,8 @@ def test_toml_and_yaml_files_give_the_same_spec(tmp_path):
                     "run: {t_end: 2.0}\nlimits: {vib_peak_m: 1.0e-4}\n")
     a, b = load_spec(toml), load_spec(yaml)
     assert a == b
-    assert a.points[1] == {"amplitude": 0.4, "n_rfe": 0}
+    # the second point does not set T: it runs (and its row shows) the default period
+    assert a.points[1] == {"amplitude": 0.4, "period": CraneParameters().period, "n_rfe": 0}
     assert a.limits == {"vib_peak_m": 1e-4}
 
 
@@ -276,6 +277,6 @@ def test_cli_invalid_sweep_exits_2_with_every_problem(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     for part in ("problems in the sweep description", "--param 'A': expected NAME=VALUE",
-                 "limits.x: not a metric", "run.t_end must be > 0",
+                 "limits.x: not a metric", "run.t_end (--t-end) must be finite and > 0, got -1.0",
                  "mode 'grid' needs at least one parameter"):
         assert part in err

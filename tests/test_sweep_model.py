@@ -218,19 +218,33 @@ def test_arm_grid_flexibility_scales_with_one_over_e():
     np.testing.assert_allclose(ratio, 2.0, rtol=0.05)
 
 
-def test_unreachable_and_refused_points_are_recorded_outcomes(tmp_path):
+def test_unreachable_points_are_recorded_outcomes(tmp_path):
     spec = spec_from_dict({"model": str(ARM), "mode": "list", "points": [
         {"constraint.tool_height.function.offset": 1.0},     # 1 m above a 0.85 m reach
-        {"flexible.forearm.youngs_modulus": -1.0},
         {"flexible.forearm.segments": 2}]})
     table = run_sweep(spec, tmp_path, report=None, in_process=True)
-    assert table.status.tolist() == ["infeasible", "invalid", "ok"]
-    assert table.failed_run.tolist() == ["build", "build", ""]
+    assert table.status.tolist() == ["infeasible", "ok"]
+    assert table.failed_run.tolist() == ["build", ""]
     assert "ConstraintError" in table.error[0] and "on_constraints" in table.error[0]
-    assert "flexible[0].youngs_modulus: must be > 0 (Pa), got -1.0" in table.error[1]
     assert not table.constraints_met[0] and np.isnan(table["rfem_peak_rad"][0])
     # two segments: the second segment's coordinates are columns of their own
-    assert table["q_dot_peak.theta_forearm_2"].notna().tolist() == [False, False, True]
+    assert table["q_dot_peak.theta_forearm_2"].notna().tolist() == [False, True]
+    # each point sets one parameter: the other runs at the file's value, shown in the table
+    assert table["flexible.forearm.segments"].tolist() == [1, 2]
+    assert table["constraint.tool_height.function.offset"].tolist() == [1.0, 0.0]
+
+
+def test_value_the_loader_refuses_is_a_spec_error_before_any_run():
+    with pytest.raises(SweepSpecError) as info:
+        spec_from_dict({"model": str(ARM), "parameters": {
+            "flexible.forearm.youngs_modulus": [-1.0, 70e9], "joint.shoulder.damping": [0.5]}})
+    assert str(info.value) == ("parameters.flexible.forearm.youngs_modulus = -1.0: "
+                               "flexible[0].youngs_modulus: must be > 0 (Pa), got -1.0")
+    # a point function given such a value still records it as an outcome, not a crash
+    row = run_model_point(read_model_document(ARM), {"flexible.forearm.youngs_modulus": -1.0},
+                          ModelRunSettings())
+    assert row["status"] == "invalid" and row["failed_run"] == "build"
+    assert "flexible[0].youngs_modulus: must be > 0 (Pa), got -1.0" in row["error"]
 
 
 def test_run_ending_inside_the_transient_is_not_counted_as_met():
@@ -284,5 +298,5 @@ def test_cli_unknown_path_exits_2_listing_the_valid_paths(tmp_path, capsys):
     assert "unknown parameter path 'joint.shoulder.stifness' (did you mean " \
            "'joint.shoulder.stiffness'" in err
     assert "valid paths in sweep_arm2.toml: flexible.forearm.section.diameter" in err
-    assert "run.n_rfe: not a setting of a model-file sweep" in err
+    assert "run.n_rfe (--n-rfe): not a setting of a model-file sweep" in err
     assert "Traceback" not in err
