@@ -146,9 +146,9 @@ def dynamics_terms(model, t, q, q_dot):
     q = np.asarray(q, dtype=float)
     q_dot = np.asarray(q_dot, dtype=float)
     if fast.ENABLED:
-        t_all, s_all, m, h, g = fast.chain_and_terms(
-            model.origins, model.generators, model.is_revolute, model.pseudo_inertias,
-            model.gamma, q, q_dot)
+        t_all, s_all, m, h, g = fast.run(
+            fast.chain_and_terms, model.origins, model.generators, model.is_revolute,
+            model.pseudo_inertias, model.gamma, q, q_dot)
         return DynamicsTerms(ChainKinematics(q, t_all, s_all), m, h, g,
                              model.stiffness * (q - model.spring_reference),
                              model.damping * q_dot, model.drive_forces(t))

@@ -26,6 +26,23 @@ else:  # pragma: no cover
         return f
 
 
+def run(kernel, *args):
+    """``kernel(*args)``, giving back an interrupt that arrived while it ran.
+
+    A signal handler that raises (Ctrl-C's KeyboardInterrupt; gpme's SIGTERM handler raises
+    a subclass of it) while a compiled kernel returns makes the call fail with SystemError
+    ("... returned a result with an exception set") chained to the interrupt; an
+    ``except Exception`` on the way up would then take the interrupt for a failure.
+    """
+    try:
+        return kernel(*args)
+    except SystemError as exc:
+        for cause in (exc.__cause__, exc.__context__):
+            if isinstance(cause, KeyboardInterrupt):
+                raise cause from None
+        raise
+
+
 @_jit
 def _mm4(a, b, out):
     """out = a @ b for 4x4 arrays, no allocation."""

@@ -352,7 +352,7 @@ def _reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
     for the partition (ic, dc); never raises (ok False or rcond <= SINGULAR_RCOND: the
     caller raises).  Compiled kernel when gpme_core.fast is enabled, numpy otherwise."""
     if fast.ENABLED:
-        return fast.reduced_solve(m, rhs, a, constraint_rhs, ic, dc)
+        return fast.run(fast.reduced_solve, m, rhs, a, constraint_rhs, ic, dc)
     n, k = m.shape[0], dc.shape[0]
     a_dc = a[:, dc]
     try:

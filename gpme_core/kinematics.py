@@ -137,8 +137,8 @@ def point_kinematics(model, kin, q_dot, link, r_local):
     """Kinematics of the point r_local (3,) m (in the frame of ``link``) at kin, q_dot."""
     from . import fast
     if fast.ENABLED:
-        pos, vel, jac, drift = fast.point(kin.T, kin.S, np.asarray(q_dot, dtype=float), link,
-                                          np.asarray(r_local, dtype=float))
+        pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, np.asarray(q_dot, dtype=float),
+                                        link, np.asarray(r_local, dtype=float))
         return PointKinematics(pos, vel, jac, drift)
     r = np.append(np.asarray(r_local, dtype=float), 1.0)
     r_world = kin.T[link] @ r
