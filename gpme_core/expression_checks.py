@@ -127,7 +127,8 @@ def why_not_finite(expr: sp.Expr, inputs) -> str:
     sets = singular_sets(expr)
     if sets:
         return f"; where it is not smooth or out of its domain: {'; '.join(sets)}"
-    return "; it has no singular point, so a value overflowed float64"
+    return ("; it has no singular point known here: a value overflowed float64, or SymPy's "
+            "formula of a derivative is 0/0 at this point (as sinc's at 0)")
 
 
 # ====================================================================== construction
