@@ -126,3 +126,13 @@ def test_interrupt_inside_a_compiled_kernel_is_given_back():
     with pytest.raises(SystemError):            # any other SystemError stays what it is
         fast.run(kernel_interrupted_by(ValueError("x")))
     assert fast.run(lambda a, b: a + b, 2, 3) == 5
+
+
+def test_lock_taker_removes_a_killed_writers_temporary_files(tmp_path):
+    from gpme.out_lock import exclusive_output
+    stale = tmp_path / ".history.csv.k3j2h1.tmp"
+    stale.write_text("half a history")
+    good = tmp_path / "history.csv"
+    good.write_text("t,q\n0,0\n")
+    with exclusive_output(tmp_path):
+        assert not stale.exists() and good.read_text() == "t,q\n0,0\n"
