@@ -232,3 +232,17 @@ def test_radau_run_of_the_flexible_crane_prints_no_warnings():
         df = simulate(system, 0.1, q0, q_dot0, method="Radau", output_dt=0.02, rtol=1e-4,
                       atol=1e-6)
     assert np.isfinite(df.to_numpy(float)).all()
+
+
+def test_crane_parameters_listed_with_their_combinations(tmp_path, capsys):
+    """A key's own problem (a negative yield strength) and a combination of keys (an arm
+    wall thicker than the arm's radius) in one message, not one after the other."""
+    text = (ROOT / "models" / "crane_flexible.toml").read_text().replace(
+        "n_rfe = 3 ", "arm_yield_strength = -5.0\narm_wall_thickness = 0.5\nn_rfe = 3 ", 1)
+    model = tmp_path / "crane.toml"
+    model.write_text(text)
+    code, err = _run(["simulate", "--model", str(model), "--out", str(tmp_path / "o"),
+                      "--no-progress"], capsys)
+    assert code == 2 and "2 problems" in err
+    assert "model.crane.arm_yield_strength: must be > 0 (Pa), got -5.0" in err
+    assert "wall_thickness 0.5 m must be smaller than the outer radius 0.01 m" in err

@@ -307,16 +307,14 @@ def _check_finite_at(spec: ModelFile, model: Model, q0, label: str) -> None:
             continue
         fr = model.frame(c.frame)
         p = (kin.T[fr.link_index] @ fr.transform[:, 3])[:3]
-        con = SympyPointConstraint(c.phi, frame=c.frame, name=c.name)
-        with np.errstate(all="ignore"):
-            terms = con.local_terms(p, 0.0)
-        if all(np.all(np.isfinite(np.asarray(v, dtype=float))) for v in terms):
+        bad = SympyPointConstraint(c.phi, frame=c.frame, name=c.name).non_finite_terms(p, 0.0)
+        if not bad:
             continue
         sets = ex.singular_sets(c.phi)
         problems.append(
             f"{label}: {c.key}.phi: constraint {c.name!r} = {c.text!r} or its first or second "
             f"derivatives are not finite at the initial state (t = 0 s, frame {c.frame!r} at "
-            f"x, y, z = {', '.join(f'{v:.6g}' for v in p)} m): phi = {float(terms[0]):.6g}"
+            f"x, y, z = {', '.join(f'{v:.6g}' for v in p)} m): {bad}"
             + (f"; it is not smooth {'; '.join(sets)}" if sets else "")
             + "; the GPME needs phi twice differentiable along the motion")
     if problems:

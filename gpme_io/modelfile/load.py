@@ -18,7 +18,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from gpme_core import time_functions as tfn
-from gpme_core.errors import ModelError
+from gpme_core.errors import ConstraintError, ModelError
 from gpme_examples.crane import CraneParameters
 from gpme_io.scenario import INTEGRATORS, ToleranceOverride
 
@@ -426,7 +426,23 @@ def _crane_source(c: _Checker, t: dict) -> Optional[CraneSource]:
         c.add("model.crane.column_inner_radius", f"must be < column_radius = {outer!r} m, got "
               f"{inner!r}")
         ok = False
+        overrides.pop("column_inner_radius", None)
+    ok &= _crane_trial_build(c, {k: v for k, v in overrides.items() if v is not None}, n_rfe)
     return CraneSource(overrides, n_rfe) if ok else None
+
+
+def _crane_trial_build(c: _Checker, valid: dict, n_rfe: int) -> bool:
+    """Build the crane from the keys that passed their own checks (defaults for the rest),
+    so that a combination no single key shows (an arm wall as thick as the arm's radius) is
+    listed together with the keys' own problems, not after they are fixed."""
+    from gpme_examples.crane import build_crane
+    try:
+        build_crane(max(n_rfe, 0), CraneParameters(**valid))
+    except ModelError as exc:
+        for problem in exc.problems:
+            c.add("model.crane", problem)
+        return False
+    return True
 
 
 # ====================================================================== [chain], [[flexible]]
@@ -577,9 +593,8 @@ def function_problems(fn: tfn.TimeFunction, t_end: float) -> str:
         for t in np.linspace(0.0, t_end, SAMPLES):
             try:
                 vals = (fn.value(t), fn.rate(t), fn.acceleration(t))
-            except (ValueError, ZeroDivisionError, OverflowError, TypeError) as exc:
-                vals = (math.nan,) * 3
-                del exc
+            except (ConstraintError, ArithmeticError, ValueError, TypeError):
+                vals = (math.nan,) * 3      # a SympyTimeFunction raises where not finite
             if not all(np.isfinite(v) for v in vals):
                 where = ""
                 if isinstance(fn, tfn.SympyTimeFunction):
