@@ -99,8 +99,12 @@ class ProgrammedMotion:
         self.bound = bind_constraints(model, self.constraint_specs)
         self.constraint_names = tuple(b.name for b in self.bound)
         self.n_constraints = len(self.bound)
-        alpha, beta = baumgarte
         problems = []
+        try:
+            alpha, beta = (float(v) for v in baumgarte)
+        except (TypeError, ValueError):
+            raise ModelError(f"baumgarte must be two numbers (alpha, beta) in 1/s, got "
+                             f"{baumgarte!r}") from None
         if not (np.isfinite(alpha) and alpha >= 0 and np.isfinite(beta) and beta >= 0):
             problems.append(f"Baumgarte parameters must be finite and >= 0 (1/s), got "
                             f"alpha={alpha!r}, beta={beta!r}")
@@ -216,6 +220,10 @@ class ProgrammedMotion:
         self._require_partition()
         q = np.asarray(q, dtype=float)
         q_dot = np.asarray(q_dot, dtype=float)
+        if q.shape != q_dot.shape or q.shape != (self.model.n_coordinates,):
+            raise ModelError(f"q and q_dot must have shape ({self.model.n_coordinates},), "
+                             f"ordered as {list(self.model.coordinate_names)}; got "
+                             f"{q.shape} and {q_dot.shape}")
         terms = dynamics_terms(self.model, t, q, q_dot)
         rhs = terms.rhs
         if self.damping_form == "paper-eq7":

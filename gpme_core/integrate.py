@@ -296,11 +296,31 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     they happened; with the solve_ivp methods "t" is the time of the evaluation that
     switched, which may belong to a step the method later rejected.
     """
+    from .gpme import ProgrammedMotion
+    if not isinstance(system, ProgrammedMotion):
+        raise ModelError(f"system must be a gpme_core.gpme.ProgrammedMotion (a model with its "
+                         f"constraints; ProgrammedMotion(model) for none), got "
+                         f"{type(system).__name__}")
     model = system.model
     n = model.n_coordinates
-    q0 = np.asarray(q0, dtype=float)
-    q_dot0 = np.asarray(q_dot0, dtype=float)
     problems = []
+    try:
+        q0 = np.asarray(q0, dtype=float)
+        q_dot0 = np.asarray(q_dot0, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"q0 and q_dot0 must be arrays of numbers ordered as "
+                         f"{list(model.coordinate_names)} ({exc})") from None
+    not_numbers = [label for label, value in (("t_end", t_end), ("dt", dt),
+                                              ("output_dt", output_dt))
+                   if value is not None and (isinstance(value, bool) or not isinstance(
+                       value, (int, float, np.integer, np.floating)))]
+    problems += [f"{label} must be a number of seconds, got {value!r}" for label, value in
+                 (("t_end", t_end), ("dt", dt), ("output_dt", output_dt))
+                 if label in not_numbers]
+    # the range checks below read the values that are numbers (nan stands in for the others)
+    t_end = np.nan if "t_end" in not_numbers else t_end
+    dt_ok = "dt" not in not_numbers
+    output_dt_ok = "output_dt" not in not_numbers
     for label, arr in (("q0", q0), ("q_dot0", q_dot0)):
         if arr.shape != (n,):
             problems.append(f"{label} must have shape ({n},) ordered as {list(model.coordinate_names)}, "
@@ -309,16 +329,18 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
             problems.append(f"{label} must be finite, got {arr.tolist()}")
     if method not in METHODS:
         problems.append(f"method must be one of {METHODS}, got {method!r}")
-    if not (np.isfinite(t_end) and t_end > 0):
+    if "t_end" not in not_numbers and not (np.isfinite(t_end) and t_end > 0):
         problems.append(f"t_end must be positive (s), got {t_end!r}")
-    if dt is not None and not (isinstance(dt, (int, float, np.floating)) and np.isfinite(dt)
-                               and dt > 0):
+    if not dt_ok:
+        pass
+    elif dt is not None and not (np.isfinite(dt) and dt > 0):
         problems.append(f"dt must be a positive step in s, got {dt!r}")
     elif dt is not None and np.isfinite(t_end) and t_end > 0 and dt > t_end:
         problems.append(f"dt = {dt!r} s is longer than the run (t_end = {t_end!r} s); give "
                         "dt <= t_end")
-    if not (isinstance(output_dt, (int, float, np.floating)) and np.isfinite(output_dt)
-            and output_dt > 0):
+    if not output_dt_ok:
+        pass
+    elif not (np.isfinite(output_dt) and output_dt > 0):
         problems.append(f"output_dt must be a positive spacing in s, got {output_dt!r}")
     elif np.isfinite(t_end) and t_end > 0:
         history_bytes = (t_end / output_dt + 1) * (2 * n + N_WORK) * 8

@@ -15,6 +15,7 @@ import pytest
 from gpme.cli import main
 from gpme.out_lock import exclusive_output
 from gpme_core.errors import GpmeError, ModelError, UnstableStepError
+from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 
@@ -186,7 +187,10 @@ def crane():
 
 @pytest.mark.parametrize("kwargs,error,words", [
     ({"dt": 0.0}, ModelError, ["dt must be a positive step in s, got 0.0"]),
-    ({"dt": "1e-3"}, ModelError, ["dt must be a positive step in s, got '1e-3'"]),
+    ({"dt": "1e-3"}, ModelError, ["dt must be a number of seconds, got '1e-3'"]),
+    ({"t_end": "1"}, ModelError, ["t_end must be a number of seconds, got '1'"]),
+    ({"q0": ["a", "b", "c", "d"]}, ModelError, ["q0 and q_dot0 must be arrays of numbers",
+                                                "'z1', 'psi2', 'psi3', 'z4'"]),
     ({"dt": 2.0}, ModelError, ["dt = 2.0 s is longer than the run"]),
     ({"output_dt": 0.0}, ModelError, ["output_dt must be a positive spacing"]),
     ({"output_dt": np.nan}, ModelError, ["output_dt must be a positive spacing"]),
@@ -195,13 +199,13 @@ def crane():
     ({"method": "Euler"}, ModelError, ["method must be one of", "'Euler'"]),
     ({"dt": 0.5}, UnstableStepError, ["dt = 0.5 s is unstable", "stiffest mode"]),
     ({"switch_rcond": -1.0}, ModelError, ["switch_rcond must be a positive number or None"]),
-], ids=["dt_zero", "dt_text", "dt_too_long", "output_dt_zero", "output_dt_nan",
+], ids=["dt_zero", "dt_text", "t_end_text", "q0_text", "dt_too_long", "output_dt_zero", "output_dt_nan",
         "t_end_memory", "method", "dt_unstable", "switch_rcond"])
 def test_simulate_api_refuses(crane, kwargs, error, words):
     system, q0, q_dot0 = crane
-    args = {"t_end": 1.0, **kwargs}
+    args = {"t_end": 1.0, "q0": q0, "q_dot0": q_dot0, **kwargs}
     with pytest.raises(error) as exc:
-        simulate(system, q0=q0, q_dot0=q_dot0, **args)
+        simulate(system, **args)
     assert isinstance(exc.value, GpmeError)
     for word in words:
         assert word in str(exc.value)
@@ -246,3 +250,22 @@ def test_crane_parameters_listed_with_their_combinations(tmp_path, capsys):
     assert code == 2 and "2 problems" in err
     assert "model.crane.arm_yield_strength: must be > 0 (Pa), got -5.0" in err
     assert "wall_thickness 0.5 m must be smaller than the outer radius 0.01 m" in err
+
+
+@pytest.mark.parametrize("call,words", [
+    (lambda m, s, q, qd: simulate(m, 1.0, q, qd), ["system must be a gpme_core.gpme."
+                                                   "ProgrammedMotion", "got Model"]),
+    (lambda m, s, q, qd: ProgrammedMotion(m, (), baumgarte="fast"),
+     ["baumgarte must be two numbers (alpha, beta) in 1/s, got 'fast'"]),
+    (lambda m, s, q, qd: s.solve(0.0, q[:2], qd), ["q and q_dot must have shape (4,)",
+                                                   "got (2,) and (4,)"]),
+    (lambda m, s, q, qd: simulate(s, "2", q, qd, dt="x", output_dt=0.0),
+     ["t_end must be a number of seconds", "dt must be a number of seconds",
+      "output_dt must be a positive spacing"]),
+], ids=["model_for_system", "baumgarte_text", "solve_shape", "several_at_once"])
+def test_api_misuse_named(crane, call, words):
+    system, q0, q_dot0 = crane
+    with pytest.raises(ModelError) as exc:
+        call(system.model, system, q0, q_dot0)
+    for word in words:
+        assert word in str(exc.value)
