@@ -168,6 +168,7 @@ def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None):
     except (SimulationError, ConstraintError) as exc:
         if partition is not None:
             _raise_if_unstable(partition, dt, ts[-1], ys[-1], n, exc)
+            _raise_with_singular_sets(partition.system, exc)
         raise
     finally:
         bar.close()
@@ -186,6 +187,34 @@ def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
             unstable_step_message(dt, limit, mode, f"at t = {t_good:.6g} s, the last "
                                   "recorded state before the run failed") +
             f". The failure it caused: {exc}") from None
+
+
+def nonsmooth_expressions(system):
+    """['constraint 'C': division: where t - 0.03 = 0', ...]: where the SymPy expressions of
+    ``system`` (constraints, programmes, drives) are not smooth (poles, domain edges)."""
+    from .expression_checks import singular_sets
+    found = []
+    named = [(f"constraint {c.name!r}", c) for c in system.constraint_specs]
+    named += [(f"drive on {d.joint!r}", d) for d in system.model.drives]
+    for label, item in named:
+        for holder in (item, getattr(item, "function", None)):
+            expr = getattr(holder, "expr", None)
+            if expr is not None:
+                found += [f"{label}: {where}" for where in singular_sets(expr)]
+    return found
+
+
+def _raise_with_singular_sets(system, exc):
+    """Re-raise a divergence or a coordinate leaving its range with the places where the
+    run's expressions are not smooth (a pole the step grid stepped over gives huge, finite
+    values, not a non-finite one)."""
+    if not ("diverged" in str(exc) or "the motion reaches" in str(exc)):
+        return
+    hints = nonsmooth_expressions(system)
+    if hints:
+        raise type(exc)(f"{exc}. Expressions of this run that are not smooth "
+                              f"everywhere (a pole or domain edge the run may have crossed): "
+                              f"{'; '.join(hints)}") from None
 
 
 class Progress:
@@ -394,8 +423,12 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
         ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition)
         nfev = 4 * int(round(t_end / dt))
     else:
-        ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n,
-                              max_step=dt)
+        try:
+            ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n,
+                                  max_step=dt)
+        except (SimulationError, ConstraintError) as exc:
+            _raise_with_singular_sets(start_system, exc)
+            raise
     wall = time.perf_counter() - start
     df = history_frame(start_system, ts, ys, switch_rcond)
     df.attrs.update(model=model.name, method=method, dt=dt,

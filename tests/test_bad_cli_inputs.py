@@ -269,3 +269,20 @@ def test_api_misuse_named(crane, call, words):
         call(system.model, system, q0, q_dot0)
     for word in words:
         assert word in str(exc.value)
+
+
+@pytest.mark.parametrize("method", ["RK4", "RK45"])
+def test_a_pole_stepped_over_is_named(method, tmp_path):
+    """A programme with a pole at t = 0.0301 s, between the steps: the values stay finite but
+    huge, the run stops on a coordinate's range, and the message names the pole."""
+    from gpme_io.modelfile import load_model_file
+    text = (ROOT / "examples" / "my_arm" / "my_arm.toml").read_text()
+    text = text.replace('q = "0.8*sin(pi*t)"', 'q = "0.001/(t - 0.0301)"').replace(
+        'urdf = "my_arm.urdf"', f'urdf = "{ROOT / "examples" / "my_arm" / "my_arm.urdf"}"')
+    path = tmp_path / "pole.toml"
+    path.write_text(text)
+    scenario = load_model_file(path)
+    with pytest.raises(GpmeError) as exc:
+        simulate(scenario.system, 0.1, scenario.q0, scenario.q_dot0, method=method,
+                 dt=1e-3 if method == "RK4" else None)
+    assert "division: where t - 0.0301 = 0" in str(exc.value)
