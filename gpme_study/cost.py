@@ -5,13 +5,15 @@ Per point, the runs it makes (the crane: a rigid run and, with n_rfe > 0, a flex
 the same parameters; a model file: one run of its integrator), each of
 
     steps = t_end / dt RK4 steps,  rows = t_end / output_dt + 1 recorded rows,
-    seconds = steps x step_s + rows x ROW_PASSES x row_s (+ the model file's build)
+    seconds = fixed_s + steps x step_s + rows x ROW_PASSES x row_s (+ the model file's build)
 
-step_s and row_s are measured, not modelled: a warm-up run of warm_up_steps(n) steps with
-every step recorded, on the first sampled point of each model size (n coordinates), gives
-step_s = its integration wall time / steps (four right-hand-side evaluations, the state
-check, the RK4 stability check at the start spread over the steps) and row_s = the rest
-of the call / rows (one reduced solve, energies and frame positions per row).  A row is
+step_s, row_s and fixed_s are measured, not modelled: two warm-up runs of k and 2k steps
+(k = warm_up_steps(n)) with every step recorded, on the first sampled point of each model
+size (n coordinates), give step_s = the difference of their integration wall times / k
+(four right-hand-side evaluations and the state check), row_s = the difference of the
+rest of the calls / the extra rows (one reduced solve, energies and frame positions per
+row), fixed_s = what is left of the first (the RK4 stability check and the start on the
+constraints, once per run).  A row is
 evaluated ROW_PASSES times in a point: the history, then the metrics (reactions, Jacobian).
 dt is each sampled point's own step (the sweep's --dt, else the model file's or the
 suggested stable step, exactly as the point will run).  The adaptive integrators of a
@@ -49,14 +51,14 @@ SAMPLE_POINTS = 12
 SAMPLE_BUDGET_S = 5.0
 # passes over the recorded rows per run: the history frame, then the metrics
 ROW_PASSES = 2
-# s, starting a local Dask cluster and importing gpme on its workers (measured 3-5 s on
-# the 2-core machine, docs/sweep.md)
-DASK_START_S = 5.0
+# s, starting a local Dask cluster, importing gpme and loading the kernels on its workers
+# (measured 11-15 s for 2 workers on the shared 2-core machine, docs/sweep.md)
+DASK_START_S = 15.0
 # bytes on disk: a point file per stored key/value (JSON, indent 1), a table cell (CSV and
 # Parquet together), a heat map
 POINT_FILE_BYTES_PER_VALUE = 45
 TABLE_BYTES_PER_CELL = 30
-FIGURE_BYTES = 120_000
+FIGURE_BYTES = 40_000       # measured 35-38 kB (120 dpi, 6.4 x 4.8 in)
 # the history of one run in memory: the integrated states (2n + 3 floats, a numpy array of
 # ~112 bytes each row while recorded) and the DataFrame built from them
 ARRAY_OVERHEAD_BYTES = 112
@@ -71,12 +73,13 @@ def warm_up_steps(n):
 @dataclass(frozen=True)
 class StepCost:
     """Measured costs of one model size: s per RK4 step (adaptive: per simulated second,
-    ``per_sim_s``), s per recorded row, and the warm-up's dt (s)."""
+    ``per_sim_s``), s per recorded row, the warm-up's dt (s) and s once per run."""
 
     step_s: float
     row_s: float
     dt: float
     per_sim_s: Optional[float] = None
+    fixed_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -125,21 +128,32 @@ class Sampler:
         return self.costs[key]
 
 
-def _warm_up(system, q0, q_dot0, dt, method, on_manifold):
+def _timed_run(system, q0, q_dot0, dt, steps, method, on_manifold):
+    """(integration s, whole call s, rows) of a run of ``steps`` steps, every one recorded."""
     from gpme_core.integrate import simulate
-    steps = warm_up_steps(system.model.n_coordinates)
-    t_w = steps * dt
-    start = time.perf_counter()
     kwargs = {"dt": dt} if method == "RK4" else {}
-    df = simulate(system, t_w, q0, q_dot0, method=method, output_dt=dt, on_manifold=on_manifold,
-                  **kwargs)
+    start = time.perf_counter()
+    df = simulate(system, steps * dt, q0, q_dot0, method=method, output_dt=dt,
+                  on_manifold=on_manifold, **kwargs)
     total = time.perf_counter() - start
-    integration = float(df.attrs.get("wall_time_s", total))
-    rows = len(df)
-    row_s = max(total - integration, 0.0) / max(rows, 1)
+    return float(df.attrs.get("wall_time_s", total)), total, len(df)
+
+
+def _warm_up(system, q0, q_dot0, dt, method, on_manifold):
+    """StepCost from two warm-up runs, of k and 2k steps: their differences give the cost
+    per step and per row without what every run costs once (the stability check at the
+    start, the start on the constraints, building the table), which is ``fixed_s``."""
+    k = warm_up_steps(system.model.n_coordinates)
+    int1, tot1, rows1 = _timed_run(system, q0, q_dot0, dt, k, method, on_manifold)
+    int2, tot2, rows2 = _timed_run(system, q0, q_dot0, dt, 2 * k, method, on_manifold)
+    step_s = (int2 - int1) / k
+    row_s = ((tot2 - int2) - (tot1 - int1)) / max(rows2 - rows1, 1)
+    if step_s <= 0 or row_s <= 0:       # timing noise (a busy machine): the plain ratios
+        step_s, row_s = int2 / (2 * k), (tot2 - int2) / rows2
+    fixed_s = max(tot1 - k * step_s - rows1 * row_s, 0.0)
     if method == "RK4":
-        return StepCost(integration / steps, row_s, dt)
-    return StepCost(integration / steps, row_s, dt, per_sim_s=integration / t_w)
+        return StepCost(step_s, row_s, dt, fixed_s=fixed_s)
+    return StepCost(step_s, row_s, dt, per_sim_s=step_s / dt, fixed_s=fixed_s)
 
 
 def _history_bytes(system, rows):
@@ -157,7 +171,7 @@ def _run_plan(cost, system, t_end, output_dt, dt):
     else:
         steps = math.ceil(t_end / dt - 1e-9)
         integration = steps * cost.step_s
-    return RunPlan(steps, rows, integration + rows * ROW_PASSES * cost.row_s,
+    return RunPlan(steps, rows, cost.fixed_s + integration + rows * ROW_PASSES * cost.row_s,
                    _history_bytes(system, rows))
 
 
@@ -317,11 +331,22 @@ def estimate(spec, points, workers=1, dask=False, report=None, budget_s=SAMPLE_B
     else:
         point_s, parallel, wall = (0.0, 0.0, 0.0), max(1, workers), 0.0
     columns = len(spec.metric_table) + len(spec.swept) + 15
-    plots = 2 + len(spec.metric_table) if spec.plot_x and spec.plot_y else 0
+    plots = _figures(spec) if spec.plot_x and spec.plot_y else 0
     output = (len(spec.points) * columns * (POINT_FILE_BYTES_PER_VALUE + TABLE_BYTES_PER_CELL)
               + plots * FIGURE_BYTES)
     return CostEstimate(n, len(seconds), point_s, parallel, wall, float(output), history,
                         steps, sampler.first_call_s, time.perf_counter() - start)
+
+
+def _figures(spec):
+    """Number of figures the sweep draws (gpme_study.plots.write_plots)."""
+    from .plots import HEAT_MAP_METRICS
+    if spec.model is None:
+        maps = len(HEAT_MAP_METRICS)
+    else:
+        from .model_metrics import heat_map_metrics
+        maps = len(heat_map_metrics(spec.metric_table, spec.limits))
+    return maps + (1 if spec.limits else 0)
 
 
 def _seconds(s):

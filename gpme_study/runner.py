@@ -183,12 +183,16 @@ class PointProgress:
 
 def _warm_up_worker():
     """Import gpme and compile the numba kernels (or load them from numba's on-disk
-    cache) on a Dask worker before its first point, so that point's time is its own."""
+    cache) on a Dask worker before its first point, so that point's time is its own: a
+    few RK4 steps of the flexible crane with every row recorded (the solve, the history's
+    frame positions and energies)."""
     from gpme_examples.crane import CraneParameters, crane_system, initial_state
+    from gpme_core.integrate import simulate
     from gpme_study import model_point  # noqa: F401 - imported by a model file's points
     params = CraneParameters()
     system = crane_system(1, params)
-    system.solve(0.0, *initial_state(system.model, params))
+    q0, q_dot0 = initial_state(system.model, params)
+    simulate(system, 5e-5, q0, q_dot0, dt=1e-5, output_dt=1e-5, on_manifold=True)
 
 
 def _compute(pending, spec, store, client, progress, report):

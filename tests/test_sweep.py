@@ -3,6 +3,11 @@ failures recorded, the Dask runner with resume, the table against direct single 
 plots and the command line.  Runs are short (t_end 1 s, n_rfe <= 1) to keep this file fast.
 """
 import json
+import re
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pandas as pd
@@ -280,3 +285,97 @@ def test_cli_invalid_sweep_exits_2_with_every_problem(tmp_path, capsys):
                  "limits.x: not a metric", "run.t_end (--t-end) must be finite and > 0, got -1.0",
                  "mode 'grid' needs at least one parameter"):
         assert part in err
+
+
+# ------------------------------------------------------------------ interruptions
+# 8 points of the rigid crane, 0.3 s each: a few seconds in one process
+FAULT_ARGS = ["sweep", "--param", "A=0.2:0.5:8", "--n-rfe", "0", "--t-end", "0.3",
+              "--transient", "0.1", "--in-process"]
+WALL_KEYS = ("wall_time_s", "rigid_sim_wall_s", "flexible_sim_wall_s")
+
+
+def _stored(out):
+    """{key: the point file's values without wall times, as JSON text}; every file in
+    points/ is either a complete point file or a hidden temporary file of an interrupted
+    atomic write (never a partial *.json)."""
+    points = out / "points"
+    stored = {}
+    for f in sorted(points.iterdir()) if points.is_dir() else []:
+        if f.name.startswith("."):
+            assert f.suffix == ".tmp", f.name
+            continue
+        assert f.suffix == ".json", f.name
+        row = json.loads(f.read_text())            # complete and loadable
+        assert row["key"] == f.stem and row["status"] == "ok"
+        stored[f.stem] = json.dumps({k: v for k, v in row.items() if k not in WALL_KEYS},
+                                    sort_keys=True)
+    return stored
+
+
+def _temporary_files(out):
+    return [p for p in out.rglob(".*.tmp")]
+
+
+def _sweep_process(out):
+    return subprocess.Popen([sys.executable, "-m", "gpme.cli", *FAULT_ARGS, "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=out.parent)
+
+
+def test_interrupted_point_write_leaves_the_stored_point_whole(tmp_path, monkeypatch):
+    store = ResultStore(tmp_path)
+    store.save({"key": "k", "status": "ok", "x": 1.0})
+    good = store.path("k").read_text()
+
+    def interrupted(fd):
+        raise KeyboardInterrupt       # Ctrl-C (or gpme.cli.Terminated) inside the write
+    monkeypatch.setattr("os.fsync", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        store.save({"key": "k", "status": "ok", "x": 2.0})
+    assert store.path("k").read_text() == good and store.load("k")["x"] == 1.0
+    assert sorted(p.name for p in store.directory.iterdir()) == ["k.json"]
+
+
+def test_killed_sweep_keeps_whole_points_and_resumes_to_the_same_values(tmp_path):
+    """The fault test: the command in a subprocess, killed (SIGTERM, SIGKILL) at seeded
+    random moments while points are being computed; every point file left is complete and
+    has the values of an uninterrupted sweep, and a rerun computes only the rest."""
+    start = time.perf_counter()
+    ref = tmp_path / "reference"
+    done = subprocess.run([sys.executable, "-m", "gpme.cli", *FAULT_ARGS, "--out", str(ref)],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 0, done.stderr
+    reference = _stored(ref)
+    assert len(reference) == 8
+    sweep_s = float(re.search(r"computed 8 in ([\d.]+) s", done.stdout).group(1))
+    out = tmp_path / "killed"
+    rng = np.random.default_rng(20261122)
+    for sig in (signal.SIGTERM, signal.SIGKILL, signal.SIGTERM, signal.SIGKILL):
+        proc = _sweep_process(out)
+        for line in proc.stdout:           # kill while the points are being computed
+            if "to run" in line:
+                break
+        left = 1.0 - len(_stored(out)) / 8.0      # a moment while points are left to run
+        time.sleep(rng.uniform(0.0, 0.9 * left * sweep_s))
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+        assert "Traceback" not in err
+        if sig == signal.SIGTERM and proc.returncode == 143:
+            # gpme.cli: one line; every atomic write in flight removed its temporary file
+            assert err.strip().splitlines()[-1].startswith("terminated (SIGTERM)")
+            assert _temporary_files(out) == []
+        else:
+            assert proc.returncode in (0, -sig), (sig, proc.returncode, err)
+        stored = _stored(out)
+        assert {k: reference[k] for k in stored} == stored
+        if (out / "results.csv").exists():     # written whole at the end of a finished run
+            assert len(pd.read_csv(out / "results.csv")) == 8
+    before = _stored(out)
+    final = subprocess.run([sys.executable, "-m", "gpme.cli", *FAULT_ARGS, "--out", str(out)],
+                           capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert final.returncode == 0, final.stderr
+    assert f"{len(before)} already done, {8 - len(before)} to run" in final.stdout
+    assert _stored(out) == reference
+    table = pd.read_csv(out / "results.csv")
+    assert len(table) == 8 and (table.status == "ok").all()
+    assert time.perf_counter() - start < 90
