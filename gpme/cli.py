@@ -12,6 +12,7 @@ from pathlib import Path
 from gpme.budget import MAX_CSV_BYTES, MAX_WALL_S
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (as verify's)
 
 
 class Terminated(KeyboardInterrupt):
@@ -49,6 +50,8 @@ def output_dir_problem(path, flag="--out"):
     """Why ``path`` cannot be the output directory (None when it can): made (if missing) and
     written to before any work, so a long run never ends in an unwritable place."""
     import tempfile
+    if not str(path).strip():
+        return f"{flag} is empty; give a directory (e.g. {flag} reports)"
     p = Path(path)
     if p.exists() and not p.is_dir():
         return f"{flag} {str(p)!r} exists and is not a directory; give a directory"
@@ -62,9 +65,24 @@ def output_dir_problem(path, flag="--out"):
 
 
 def load_scenarios(paths):
-    """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each)."""
+    """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each; two
+    files whose models have the same name are refused: their outputs would overwrite each
+    other)."""
+    from gpme_core.errors import ModelFileError
     from gpme_io.modelfile import load_model_file
-    return [load_model_file(Path(p)) for p in paths]
+    scenarios = [load_model_file(Path(p)) for p in paths]
+    seen = {}
+    problems = []
+    for path, scenario in zip(paths, scenarios):
+        if scenario.name in seen:
+            problems.append(f"{path} and {seen[scenario.name]} both name their model "
+                            f"{scenario.name!r} ([model] name); their outputs would "
+                            "overwrite each other: give each model file its own name, or "
+                            "each file once")
+        seen.setdefault(scenario.name, path)
+    if problems:
+        raise ModelFileError(problems)
+    return scenarios
 
 
 def _simulate_paper(args):
@@ -72,15 +90,17 @@ def _simulate_paper(args):
     from gpme.budget import run_budget
     from gpme_examples import paper
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
+    t_end = args.t_end or (CRANE_QUICK_T_END if args.quick else CRANE_T_END)
+    n_rfe = paper.DEFAULT_N_RFE if args.n_rfe is None else args.n_rfe
     runs = {}
     for case in cases:
-        label = case if case == "rigid" else f"flexible (n_rfe={args.n_rfe})"
-        print(f"simulating {label}, t_end = {args.t_end or 10.0:g} s ...", flush=True)
-        runs[case] = paper.run_case(case, n_rfe=args.n_rfe, t_end=args.t_end or 10.0, dt=args.dt,
+        label = case if case == "rigid" else f"flexible (n_rfe={n_rfe})"
+        print(f"simulating {label}, t_end = {t_end:g} s ...", flush=True)
+        runs[case] = paper.run_case(case, n_rfe=n_rfe, t_end=t_end, dt=args.dt,
                                     method=args.method or "RK4", on_manifold=args.on_manifold,
                                     static_arm=args.static_arm, progress=not args.no_progress,
                                     before_run=run_budget(label, args.force))
-        s = paper.summary(runs[case], transient=min(2.0, 0.5 * (args.t_end or 10.0)))
+        s = paper.summary(runs[case], transient=min(2.0, 0.5 * t_end))
         print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
               f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
               f"{s['max_abs_Phi_2_after_transient']:.2e} after the transient")
@@ -134,11 +154,14 @@ def _simulate(args):
     if args.dt is not None and args.method not in (None, "RK4"):
         print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
               "(its steps follow its error control)", flush=True)
-    if args.n_rfe < 0:
+    if args.n_rfe is not None and args.n_rfe < 0:
         return _error(f"--n-rfe must be 0 (rigid arm) or a positive number of RFEM "
                       f"segments, got {args.n_rfe}")
+    if args.case == "rigid" and (args.static_arm or args.n_rfe is not None):
+        return _error("--static-arm and --n-rfe set the flexible arm; --case rigid has none "
+                      "(use --case flexible or both)")
     if args.model and (args.case != "both" or args.static_arm or args.on_manifold or
-                       args.n_rfe != 3):
+                       args.n_rfe is not None):
         return _error("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
                       "crane runs; with --model the model file sets them")
     from gpme.out_lock import exclusive_output
@@ -154,7 +177,7 @@ def _simulate(args):
 
 def _crosscheck(args):
     from gpme_core.errors import GpmeError
-    if args.out and output_dir_problem(args.out):
+    if args.out is not None and output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
     from crosscheck.verify import default_scenarios, estimate_runs
     from gpme.out_lock import exclusive_output
@@ -212,11 +235,12 @@ def build_parser():
     _model_option(sim)
     sim.add_argument("--case", choices=("rigid", "flexible", "both"), default="both",
                      help="built-in crane only")
-    sim.add_argument("--n-rfe", type=int, default=3,
-                     help="built-in crane only: RFEM segments of the flexible arm")
+    sim.add_argument("--n-rfe", type=int, default=None,
+                     help="built-in crane only: RFEM segments of the flexible arm (default 3)")
     sim.add_argument("--t-end", type=float, default=None,
                      help="s (default: the model file's t_end; the crane: 10)")
-    sim.add_argument("--quick", action="store_true", help="the model file's quick_t_end")
+    sim.add_argument("--quick", action="store_true",
+                     help="the model file's quick_t_end (the crane: 2 s)")
     sim.add_argument("--dt", type=float, default=None,
                      help="RK4 step in s (default: the model file's, else half the stability "
                           "limit; refused above the limit); with an adaptive --method its "

@@ -77,6 +77,14 @@ SIMULATE_CASES = [
      ["dt = 0.5 s is unstable at the start", "stiffest mode", "use dt <= 0.049 s"]),
     ("model_t_end_absurd", ["--model", str(RIGID_TOML), "--t-end", "1e9"],
      ["1e+09 s", "rows", "GiB"]),
+    ("urdf_as_model", ["--model", str(ROOT / "examples" / "my_arm" / "my_arm.urdf")],
+     ["not valid TOML", "this looks like a URDF", "[model] urdf"]),
+    ("same_model_twice", ["--model", str(RIGID_TOML), "--model", str(RIGID_TOML)],
+     ["both name their model 'crane_rigid'", "overwrite each other"]),
+    ("static_arm_rigid", ["--case", "rigid", "--static-arm"],
+     ["--static-arm and --n-rfe set the flexible arm", "--case rigid has none"]),
+    ("n_rfe_rigid", ["--case", "rigid", "--n-rfe", "5"],
+     ["--static-arm and --n-rfe set the flexible arm"]),
 ]
 
 
@@ -99,6 +107,12 @@ def test_simulate_out_is_a_file(tmp_path, capsys):
                       "--no-progress"], capsys)
     assert code == 2 and "exists and is not a directory; give a directory" in err
     assert target.read_text() == "keep me"
+
+
+@pytest.mark.parametrize("command", [["simulate"], ["verify"], ["crosscheck", "mujoco"]])
+def test_out_empty(command, capsys):
+    code, err = _run([*command, "--out", "", "--no-progress"], capsys)
+    assert code == 2 and "--out is empty; give a directory" in err
 
 
 def test_simulate_out_unwritable(capsys):

@@ -234,7 +234,12 @@ def parse_model_file(path) -> tuple:
     except UnicodeDecodeError as exc:
         return ModelFile(path, None), [f"not UTF-8 text ({exc})"]
     except tomllib.TOMLDecodeError as exc:
-        return ModelFile(path, None), [f"not valid TOML: {exc}"]
+        hint = ""
+        if raw.lstrip().startswith(b"<") or path.suffix.lower() in (".urdf", ".xml", ".xacro"):
+            hint = ("; this looks like a URDF: --model takes a TOML model file that names it "
+                    "(`[model] urdf = \"robot.urdf\"` with its constraints, docs/models.md; "
+                    "examples/my_arm/my_arm.toml is one)")
+        return ModelFile(path, None), [f"not valid TOML: {exc}{hint}"]
     return parse_model_data(data, path)
 
 
