@@ -16,14 +16,17 @@ back.  docs/urdf.md shows the layout:
 This module only knows the file: its path, its text, its validation.
 """
 import dataclasses
+import difflib
 import json
+import math
+import warnings
 from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
 
 from gpme_core import time_functions
-from gpme_core.errors import ModelFileError
+from gpme_core.errors import ModelError, ModelFileError, SectionWarning
 from gpme_core.model import STANDARD_GRAVITY, Model
 from gpme_core.rfem import BeamProperties
 
@@ -61,17 +64,28 @@ def side_file_text(side: dict) -> str:
 
 
 def read_side_file(path) -> tuple:
-    """(side dict or None, problems) of the side file at ``path``; never raises."""
+    """(side dict or None, problems) of the side file at ``path``; never raises.
+
+    The dict holds the valid parts only (:func:`check_side_file`), so that the URDF reader
+    can still check them against the URDF and report those problems together with the
+    file's own; None when the file cannot be read or is not JSON."""
     path = Path(path)
     label = f"side file {str(path)!r}"
     try:
-        side = json.loads(path.read_text(encoding="utf-8"))
+        data = path.read_bytes()
     except OSError as exc:
-        return None, [f"{label}: cannot read it ({exc})"]
+        return None, [f"{label}: cannot read it ({exc.strerror or exc}); nothing in it was "
+                      f"checked (a side file is the JSON file <stem>{SIDE_SUFFIX} beside the "
+                      "URDF)"]
+    try:
+        side = json.loads(data)
     except json.JSONDecodeError as exc:
-        return None, [f"{label}: not valid JSON ({exc})"]
-    problems = side_file_problems(side, label)
-    return (None if problems else side), problems
+        return None, [f"{label}: not valid JSON at line {exc.lineno}, column {exc.colno} "
+                      f"({exc.msg}); nothing in it was checked"]
+    except (ValueError, RecursionError) as exc:   # bytes not UTF-8/16/32, nested too deep
+        what = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        return None, [f"{label}: not JSON text ({what}); nothing in it was checked"]
+    return check_side_file(side, label)
 
 
 def load_side_file(path) -> dict:
@@ -82,64 +96,270 @@ def load_side_file(path) -> dict:
     return side
 
 
-def _is_number(x: Any) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
-
-
 def side_file_problems(side: Any, label: str = "side file") -> list:
     """Problems of a side-file dict (empty list when valid)."""
+    return check_side_file(side, label)[1]
+
+
+def check_side_file(side: Any, label: str = "side file") -> tuple:
+    """(the valid parts of ``side``, problems); never raises.
+
+    Every key and every record is checked; each problem names the record (``joint 'z1'``,
+    ``flexible link record 'arm' (flexible_links #1)``, ``drive record on 'shoulder'
+    (drives #2, QuinticRamp)``), the value and what would be valid.  The returned dict
+    keeps only the valid keys and records (None when ``side`` is not a JSON object), so
+    that the URDF reader can check them against the URDF too; it equals ``side`` when
+    there is no problem."""
     if not isinstance(side, dict):
-        return [f"{label}: expected a JSON object, got {type(side).__name__}"]
-    problems = []
+        return None, [f"{label}: expected a JSON object {{\"format\": {SIDE_FORMAT!r}, "
+                      f"\"version\": {SIDE_VERSION}, ...}}, got a JSON {_json_type(side)}"]
+    problems = _unknown_keys(label, side, SIDE_KEYS)
     if side.get("format") != SIDE_FORMAT or side.get("version") != SIDE_VERSION:
         problems.append(f"{label}: expected format {SIDE_FORMAT!r} version {SIDE_VERSION}, got "
                         f"{side.get('format')!r} version {side.get('version')!r}")
-    g = side.get("gravity", list(STANDARD_GRAVITY))
-    if not (isinstance(g, list) and len(g) == 3 and all(_is_number(x) for x in g)):
-        problems.append(f"{label}: gravity must be 3 numbers (m/s^2), got {g!r}")
-    joints = side.get("joints", {})
+    clean = {"format": SIDE_FORMAT, "version": SIDE_VERSION}
+    if "model" in side:
+        if isinstance(side["model"], str) and side["model"].strip():
+            clean["model"] = side["model"]
+        else:
+            problems.append(f"{label}: model must be the model's name (a non-empty string), "
+                            f"got {side['model']!r}")
+    if "gravity" in side:
+        g = side["gravity"]
+        if isinstance(g, list) and len(g) == 3 and all(_is_number(x) for x in g):
+            clean["gravity"] = list(g)
+        else:
+            problems.append(f"{label}: gravity must be 3 finite numbers (m/s^2, world frame), "
+                            f"got {g!r}")
+    if "joints" in side:
+        clean["joints"] = _check_joints(side["joints"], label, problems)
+    if "massless_links" in side:
+        links = side["massless_links"]
+        if not isinstance(links, list):
+            problems.append(f"{label}: massless_links must be a list of link names, got "
+                            f"{links!r}")
+        else:
+            bad = [x for x in links if not (isinstance(x, str) and x)]
+            if bad:
+                problems.append(f"{label}: massless_links must hold link names (non-empty "
+                                f"strings), got {bad!r}")
+            clean["massless_links"] = [x for x in links if isinstance(x, str) and x]
+    for key, check in (("flexible_links", _check_flexible), ("drives", _check_drive)):
+        if key not in side:
+            continue
+        records = side[key]
+        if not isinstance(records, list):
+            problems.append(f"{label}: {key} must be a list of records, got {records!r}")
+            continue
+        clean[key] = []
+        for k, rec in enumerate(records, start=1):
+            bad = []
+            check(rec, label, k, bad)
+            problems += bad
+            if not bad:
+                clean[key].append(rec)
+    names = [r["name"] for r in clean.get("flexible_links", [])]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        problems.append(f"{label}: flexible_links has more than one record for {dup} (one "
+                        "record per link)")
+    return clean, problems
+
+
+SIDE_KEYS = ("format", "version", "model", "gravity", "joints", "massless_links",
+             "flexible_links", "drives")
+JOINT_KEYS = ("stiffness", "spring_reference")
+FLEXIBLE_KEYS = ("name", "n_segments", "beam", "joints", "links")
+DRIVE_KEYS = ("joint", "function", "parameters")
+# beam fields a side file may leave out (written before the section's extreme fibres were
+# recorded, or defaults) and those that may be null
+OPTIONAL_BEAM_FIELDS = frozenset(("bending_viscosity", "torsion_viscosity", "extreme_fibre_y",
+                                  "extreme_fibre_z"))
+NULLABLE_BEAM_FIELDS = frozenset(("torsion_viscosity", "extreme_fibre_y", "extreme_fibre_z"))
+
+
+def _is_number(x: Any) -> bool:
+    """A finite number (not a bool; an int too large for a float is not finite)."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return False
+    try:
+        return math.isfinite(float(x))
+    except OverflowError:
+        return False
+
+
+def _json_type(x: Any) -> str:
+    return {dict: "object", list: "array", str: "string", bool: "true/false",
+            type(None): "null", int: "number", float: "number"}.get(type(x), type(x).__name__)
+
+
+def _unknown_keys(where: str, given, known) -> list:
+    """'<where>: unknown key 'x' (did you mean 'y'?); the keys are ...' for each key of
+    ``given`` not in ``known``."""
+    out = []
+    for key in given:
+        if key in known:
+            continue
+        close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
+        mean = f" (did you mean {close[0]!r}?)" if close else ""
+        out.append(f"{where}: unknown key {key!r}{mean}; the keys are {', '.join(known)}")
+    return out
+
+
+def _check_joints(joints: Any, label: str, problems: list) -> dict:
+    """{joint: {stiffness, spring_reference}} of the valid joint records."""
     if not isinstance(joints, dict):
-        problems.append(f"{label}: joints must be an object name -> {{stiffness, spring_reference}}")
-        joints = {}
+        problems.append(f"{label}: joints must be an object {{joint name: {{\"stiffness\": "
+                        f"N m/rad or N/m, \"spring_reference\": rad or m}}}}, got {joints!r}")
+        return {}
+    out = {}
     for name, rec in joints.items():
-        if not isinstance(rec, dict) or set(rec) - {"stiffness", "spring_reference"}:
-            problems.append(f"{label}: joint {name!r} must hold only stiffness and "
-                            f"spring_reference, got {rec!r}")
+        where = f"{label}: joint {name!r}"
+        if not isinstance(rec, dict):
+            problems.append(f"{where} must hold only stiffness and spring_reference (an "
+                            f"object), got {rec!r}")
             continue
-        for key, val in rec.items():
-            if not _is_number(val) or not np.isfinite(val) or (key == "stiffness" and val < 0):
-                problems.append(f"{label}: joint {name!r} {key} must be a finite number"
-                                f"{' >= 0' if key == 'stiffness' else ''}, got {val!r}")
-    for key in ("massless_links", "flexible_links", "drives"):
-        if not isinstance(side.get(key, []), list):
-            problems.append(f"{label}: {key} must be a list, got {side.get(key)!r}")
-    beam_fields = {f.name for f in dataclasses.fields(BeamProperties)}
-    # optional: side files written before the section's extreme fibres were recorded
-    optional_beam_fields = {"extreme_fibre_y", "extreme_fibre_z"}
-    for rec in side.get("flexible_links", []) if isinstance(side.get("flexible_links"), list) else []:
-        if not isinstance(rec, dict) or not isinstance(rec.get("beam"), dict) or \
-                not beam_fields - optional_beam_fields <= set(rec["beam"]) <= beam_fields or not isinstance(rec.get("n_segments"), int) or \
-                rec.get("n_segments", -1) < 0 or not isinstance(rec.get("joints"), list) or \
-                not isinstance(rec.get("links"), list):
-            problems.append(f"{label}: flexible link record {rec!r} must have name, n_segments "
-                            f"(int >= 0), joints, links and beam with fields {sorted(beam_fields)} "
-                            f"({sorted(optional_beam_fields)} optional)")
-    for rec in side.get("drives", []) if isinstance(side.get("drives"), list) else []:
-        if isinstance(rec, dict) and rec.get("function") == EXPRESSION_DRIVE:
-            from gpme_io.modelfile.expressions import parse_expression
-            params = rec.get("parameters")
-            text = params.get("expr") if isinstance(params, dict) else None
-            _, bad = parse_expression(text, {"t": "s"})
-            problems += [f"{label}: drive record on {rec.get('joint')!r}: expr {p}" for p in bad]
+        bad = _unknown_keys(where, rec, JOINT_KEYS)
+        for key in JOINT_KEYS:
+            if key not in rec:
+                continue
+            val = rec[key]
+            if not _is_number(val) or (key == "stiffness" and val < 0):
+                unit = "N m/rad or N/m" if key == "stiffness" else "rad or m"
+                bad.append(f"{where} {key} must be a finite number"
+                           f"{' >= 0' if key == 'stiffness' else ''} ({unit}), got {val!r}")
+        problems += bad
+        if not bad:
+            out[name] = dict(rec)
+    return out
+
+
+def _check_flexible(rec: Any, label: str, k: int, bad: list) -> None:
+    """Problems of flexible_links record number ``k`` (1-based) into ``bad``."""
+    where = f"{label}: flexible link record (flexible_links #{k})"
+    if not isinstance(rec, dict):
+        bad.append(f"{where}: expected an object with {', '.join(FLEXIBLE_KEYS)}, got {rec!r}")
+        return
+    name = rec.get("name")
+    if isinstance(name, str) and name:
+        where = f"{label}: flexible link record {name!r} (flexible_links #{k})"
+    else:
+        bad.append(f"{where}: name must be the link's name (a non-empty string), got {name!r}")
+    bad += _unknown_keys(where, rec, FLEXIBLE_KEYS)
+    missing = [key for key in FLEXIBLE_KEYS if key not in rec and key != "name"]
+    if missing:
+        bad.append(f"{where}: missing {', '.join(missing)} (a record has "
+                   f"{', '.join(FLEXIBLE_KEYS)})")
+    n = rec.get("n_segments")
+    if "n_segments" in rec and (not isinstance(n, int) or isinstance(n, bool) or n < 0):
+        bad.append(f"{where}: n_segments must be an integer >= 0, got {n!r}")
+    for key, what in (("joints", "joint"), ("links", "link")):
+        v = rec.get(key)
+        if key in rec and not (isinstance(v, list)
+                               and all(isinstance(x, str) and x for x in v)):
+            bad.append(f"{where}: {key} must be a list of {what} names (strings), got {v!r}")
+    if "beam" in rec:
+        _check_beam(rec["beam"], f"{where} beam", bad)
+
+
+def _check_beam(beam: Any, where: str, bad: list) -> None:
+    fields = [f.name for f in dataclasses.fields(BeamProperties)]
+    if not isinstance(beam, dict):
+        bad.append(f"{where}: expected an object with the BeamProperties fields "
+                   f"{', '.join(fields)}, got {beam!r}")
+        return
+    n_before = len(bad)
+    bad += _unknown_keys(where, beam, fields)
+    missing = [key for key in fields if key not in beam and key not in OPTIONAL_BEAM_FIELDS]
+    if missing:
+        bad.append(f"{where}: missing {', '.join(missing)} (optional: "
+                   f"{', '.join(sorted(OPTIONAL_BEAM_FIELDS))})")
+    for key, val in beam.items():
+        if key not in fields or (val is None and key in NULLABLE_BEAM_FIELDS):
             continue
-        cls = getattr(time_functions, str(rec.get("function")) if isinstance(rec, dict) else "",
-                      None)
-        if not (isinstance(rec, dict) and isinstance(cls, type) and dataclasses.is_dataclass(cls)
-                and issubclass(cls, time_functions.TimeFunction)
-                and isinstance(rec.get("parameters"), dict)):
-            problems.append(f"{label}: drive record {rec!r} must name a dataclass of "
-                            "gpme_core.time_functions in 'function' with its 'parameters'")
-    return problems
+        if not _is_number(val):
+            bad.append(f"{where}: {key} must be a finite number"
+                       f"{' or null' if key in NULLABLE_BEAM_FIELDS else ''}, got {val!r}")
+    if len(bad) == n_before:
+        with warnings.catch_warnings():         # the reader warns once, when it builds it
+            warnings.simplefilter("ignore", SectionWarning)
+            bad += BeamProperties(**beam).problems(where)
+
+
+def _drive_classes() -> dict:
+    """{name: class} of the time functions a drive record may name: the frozen dataclasses
+    of gpme_core.time_functions."""
+    return {name: cls for name, cls in vars(time_functions).items()
+            if isinstance(cls, type) and issubclass(cls, time_functions.TimeFunction)
+            and dataclasses.is_dataclass(cls) and cls.__module__ == time_functions.__name__}
+
+
+def _parameters(cls) -> tuple:
+    """(field names, required field names, 'level, ramp_time' text) of a time function."""
+    fields = dataclasses.fields(cls)
+    required = [f.name for f in fields if f.default is dataclasses.MISSING
+                and f.default_factory is dataclasses.MISSING]
+    text = ", ".join(f.name + ("" if f.name in required else " (optional)") for f in fields)
+    return [f.name for f in fields], required, text
+
+
+def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
+    """Problems of drives record number ``k`` (1-based) into ``bad``."""
+    classes = _drive_classes()
+    kinds = ", ".join(sorted(classes) + [EXPRESSION_DRIVE])
+    where = f"{label}: drive record (drives #{k})"
+    if not isinstance(rec, dict):
+        bad.append(f"{where}: expected an object {{\"joint\": ..., \"function\": one of "
+                   f"{kinds}, \"parameters\": {{...}}}}, got {rec!r}")
+        return
+    joint = rec.get("joint")
+    if isinstance(joint, str) and joint:
+        where = f"{label}: drive record on {joint!r} (drives #{k}"
+    else:
+        bad.append(f"{where}: joint must be the driven joint's name (a non-empty string), "
+                   f"got {joint!r}")
+        where = f"{label}: drive record (drives #{k}"
+    function, params = rec.get("function"), rec.get("parameters")
+    if function == EXPRESSION_DRIVE:
+        fields, required, takes = ["expr"], ["expr"], "expr (an expression in t, s)"
+    elif isinstance(function, str) and function in classes:
+        fields, required, takes = _parameters(classes[function])
+    else:
+        bad += _unknown_keys(where + ")", rec, DRIVE_KEYS)
+        bad.append(f"{where}): function must be one of {kinds}, got {function!r}")
+        return
+    where = f"{where}, {function})"
+    bad += _unknown_keys(where, rec, DRIVE_KEYS)
+    if not isinstance(params, dict):
+        bad.append(f"{where}: parameters must be an object; {function} takes {takes}; got "
+                   f"{params!r}")
+        return
+    unknown = [p for p in params if p not in fields]
+    missing = [p for p in required if p not in params]
+    if unknown or missing:
+        parts = []
+        for p in unknown:
+            close = difflib.get_close_matches(str(p), fields, n=1, cutoff=0.6)
+            parts.append(f"unknown parameter {p!r}"
+                         + (f" (did you mean {close[0]!r}?)" if close else ""))
+        if missing:
+            parts.append(f"missing parameter{'s' if len(missing) > 1 else ''} "
+                         f"{', '.join(missing)}")
+        bad.append(f"{where}: {'; '.join(parts)}; {function} takes {takes}")
+        return
+    if function == EXPRESSION_DRIVE:
+        from gpme_io.modelfile.expressions import parse_expression
+        _, problems = parse_expression(params["expr"], {"t": "s"})
+        bad += [f"{where}: expr {p}" for p in problems]
+        if problems:
+            return
+    try:
+        drive_function(rec)
+    except ModelError as exc:
+        bad += [f"{where}: {p}" for p in exc.problems]
+    except (TypeError, ValueError, ArithmeticError) as exc:
+        bad.append(f"{where}: parameters {params!r} rejected ({exc}); {function} takes "
+                   f"{takes}")
 
 
 # a drive given as a SymPy expression in t: stored as its text, read back without eval
@@ -163,9 +383,12 @@ def drive_record(drive) -> Optional[dict]:
 
 def drive_function(rec: dict):
     """The time function of a validated side-file drive record (expressions parsed by
-    gpme_io.modelfile.expressions, never evaluated as Python)."""
+    gpme_io.modelfile.expressions, never evaluated as Python; ModelError for a record
+    that :func:`check_side_file` would refuse)."""
     if rec["function"] == EXPRESSION_DRIVE:
         from gpme_io.modelfile.expressions import parse_expression
-        expr, _ = parse_expression(rec["parameters"]["expr"], {"t": "s"})
+        expr, problems = parse_expression(rec["parameters"]["expr"], {"t": "s"})
+        if problems:
+            raise ModelError([f"expr {p}" for p in problems])
         return time_functions.SympyTimeFunction(expr)
     return getattr(time_functions, rec["function"])(**rec["parameters"])

@@ -48,7 +48,7 @@ from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
                              FlexibleLinkInfo, Model, validate_model)
 from gpme_core.rfem import BeamProperties, BeamSection
 
-from .side_file import drive_function, read_side_file, side_file_path, side_file_problems
+from .side_file import check_side_file, drive_function, read_side_file, side_file_path
 from .urdf_writer import UNLIMITED
 
 _MOVING = {"revolute": REVOLUTE, "continuous": REVOLUTE, "prismatic": PRISMATIC}
@@ -64,6 +64,11 @@ _UNIT_TOL = 1e-9
 # Below this norm (of a unit vector's component) the default section y axis is taken as
 # parallel to the beam and the link z axis is used instead.
 _PARALLEL_TOL = 1e-6
+# kg m^2: the largest inertia about the root (sum of m |lever|^2 + tr I) the reader
+# accepts.  The mass matrix's entries are at most this; its eigenvalue check and the
+# integrators square them, and the square must stay below double precision's 1.8e308.
+# Real machines are below 1e12 kg m^2; anything near this limit is a unit error or junk.
+_MAGNITUDE = 1e150
 
 
 # ============================================================================ public types
@@ -203,18 +208,29 @@ _NOTE_TEXT = {
     "visual": "<visual>/<collision> on {n} link{s} ignored (geometry; gpme needs only mass "
               "properties): ",
     "tags": "extension elements of {n} kind{s} ignored (not URDF dynamics): ",
+    "axis": "<axis xyz> not of unit length on {n} joint{s}, normalised (as URDF readers "
+            "do): ",
 }
 
 
-def _floats(text, count, label, problems, default):
+def _floats(text, count, label, problems, default, infinite=False):
+    """(count,) floats of an attribute's text (``default`` when absent or invalid: the
+    problem, naming the attribute, the text and what would be valid, is appended);
+    ``infinite``: +-inf is valid (limits), NaN never is."""
     if text is None:
         return np.array(default, dtype=float)
     try:
         v = np.array([float(s) for s in text.split()], dtype=float)
     except ValueError:
         v = None
-    if v is None or v.shape != (count,) or not np.all(np.isfinite(v)):
-        problems.append(f"{label}: expected {count} finite numbers, got {text!r}")
+    if v is None or v.shape != (count,) or \
+            not np.all(~np.isnan(v) if infinite else np.isfinite(v)):
+        if count == 1:
+            what = "number (inf allowed)" if infinite else "finite number"
+            problems.append(f"{label}: expected 1 {what}, got {text!r}")
+        else:
+            problems.append(f"{label}: expected {count} finite numbers, got {text!r} (write "
+                            f"{count} decimal numbers separated by spaces)")
         return np.array(default, dtype=float)
     return v
 
@@ -229,14 +245,14 @@ def _origin_transform(el, label, problems):
     return tf.homogeneous(tf.rpy_to_rotation(*rpy), xyz)
 
 
-def _read_inertial(link_el, problems):
+def _read_inertial(link_el, problems, name):
     """RigidBodyInertia of a <link> in the link frame, or None (no inertial, zero mass and
-    zero tensor, or invalid: the problem is appended)."""
-    name = link_el.get("name")
+    zero tensor, or invalid: the problem is appended, labelled with link ``name``)."""
     el = link_el.find("inertial")
     if el is None:
         return None
-    label = f"link {name!r} <inertial>"
+    label = f"link {name!r} <inertial>" if not name.startswith("#") else \
+        f"<link> {name} <inertial>"
     t = _origin_transform(el, label, problems)
     mass_el, inertia_el = el.find("mass"), el.find("inertia")
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -249,14 +265,29 @@ def _read_inertial(link_el, problems):
         problems.extend(bad)
         return None
     n_before = len(problems)
+    if mass_el.get("value") is None:
+        problems.append(f"{label}: <mass> without value=... (kg)")
+    missing = [k for k in keys if inertia_el.get(k) is None]
+    if missing:
+        problems.append(f"{label}: <inertia> without {', '.join(missing)} (kg m^2; URDF "
+                        f"needs all six: {', '.join(keys)})")
     mass = float(_floats(mass_el.get("value"), 1, f"{label} <mass value>", problems,
                          (np.nan,))[0])
-    vals = [_floats(inertia_el.get(k, "0"), 1, f"{label} <inertia {k}>", problems, (np.nan,))[0]
+    vals = [_floats(inertia_el.get(k), 1, f"{label} <inertia {k}>", problems, (np.nan,))[0]
             for k in keys]
     if len(problems) > n_before:
         return None
     ixx, ixy, ixz, iyy, iyz, izz = vals
     i_com = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = abs(mass) * float(t[:3, 3] @ t[:3, 3]) + float(np.abs(i_com).sum())
+    if not size < _MAGNITUDE:
+        problems.append(f"{label}: mass {mass!r} kg, centre of mass {t[:3, 3].tolist()} m and "
+                        f"inertia {[float(v) for v in vals]} kg m^2 give an inertia of "
+                        f"{size:.3g} kg m^2 about the link frame, too large to compute with "
+                        f"(at most {_MAGNITUDE:g}; real machines have < 1e12): check the units "
+                        "(kg, m, kg m^2)")
+        return None
     r = t[:3, :3]
     inertia = RigidBodyInertia(mass, t[:3, 3], r @ i_com @ r.T)
     bad = inertia.problems(label)
@@ -278,14 +309,16 @@ def _read_limits(el, jtype, label, problems, notes):
     for key in ("effort", "velocity"):
         v = lim.get(key)
         if v is not None:
-            x = _floats(v, 1, f"{label} <limit {key}>", problems, (np.inf,))[0]
+            x = _floats(v, 1, f"{label} <limit {key}>", problems, (np.inf,), infinite=True)[0]
             if abs(x) < UNLIMITED:
                 notes.add("effort", el.get("name"))
     if jtype == "continuous":
         return (-np.inf, np.inf), None
     # URDF: lower and upper default to 0
-    lo = float(_floats(lim.get("lower"), 1, f"{label} <limit lower>", problems, (0.0,))[0])
-    hi = float(_floats(lim.get("upper"), 1, f"{label} <limit upper>", problems, (0.0,))[0])
+    lo = float(_floats(lim.get("lower"), 1, f"{label} <limit lower>", problems, (0.0,),
+                       infinite=True)[0])
+    hi = float(_floats(lim.get("upper"), 1, f"{label} <limit upper>", problems, (0.0,),
+                       infinite=True)[0])
     if lo > hi:
         problems.append(f"{label}: <limit lower={lo!r} upper={hi!r}> must have lower <= upper "
                         "(lower == upper is read as no range)")
@@ -296,16 +329,23 @@ def _read_limits(el, jtype, label, problems, notes):
     return (-np.inf if lo <= -UNLIMITED else lo, np.inf if hi >= UNLIMITED else hi), (lo, hi)
 
 
+def _end(el, end):
+    e = el.find(end)
+    return None if e is None else e.get("link")
+
+
 def _read_joint(el, link_names, problems, notes):
     name = el.get("name")
-    if not name:
-        problems.append("a <joint> without a name attribute")
+    if not name or not name.strip():
+        problems.append(f"a <joint> without a name attribute (type {el.get('type')!r}, "
+                        f"child link {_end(el, 'child')!r}): every joint needs name=...")
         return None
     label = f"joint {name!r}"
     jtype = el.get("type")
     if jtype not in _KNOWN_TYPES:
         problems.append(f"{label}: unknown type {jtype!r}; URDF types: "
-                        f"{', '.join(_KNOWN_TYPES)}")
+                        f"{', '.join(_KNOWN_TYPES)}" if jtype is not None else
+                        f"{label}: missing type=...; URDF types: {', '.join(_KNOWN_TYPES)}")
         return None
     ends = {}
     for end in ("parent", "child"):
@@ -328,11 +368,16 @@ def _read_joint(el, link_names, problems, notes):
         ax = el.find("axis")
         if ax is not None:
             axis = _floats(ax.get("xyz"), 3, f"{label} <axis xyz>", problems, (1, 0, 0))
-        norm = float(np.linalg.norm(axis))
-        if norm == 0.0:
-            problems.append(f"{label}: <axis xyz> must not be zero")
+        scale = float(np.max(np.abs(axis)))
+        if scale == 0.0:
+            problems.append(f"{label}: <axis xyz> must not be zero, got {ax.get('xyz')!r} "
+                            "(a unit vector in the joint frame, e.g. '0 0 1')")
             axis = np.array((1.0, 0.0, 0.0))
         else:
+            axis = axis / scale
+            norm = float(np.linalg.norm(axis))
+            if abs(norm * scale - 1.0) > _UNIT_TOL:
+                notes.add("axis", name)
             axis = axis / norm
     dyn = el.find("dynamics")
     if dyn is not None:
@@ -343,6 +388,7 @@ def _read_joint(el, link_names, problems, notes):
         if damping < 0:
             problems.append(f"{label}: <dynamics damping> must be >= 0 (N m s/rad or N s/m), "
                             f"got {damping!r}")
+            damping = 0.0                 # reported here, not again by the built model
         if friction != 0.0:
             notes.add("friction", name)
     if el.find("safety_controller") is not None:
@@ -365,10 +411,22 @@ def _read_joint(el, link_names, problems, notes):
                   raw, mimic)
 
 
-def _parse(robot, problems, notes):
-    """(link names, {link: inertia or None}, [joints], {link: [<inertial> problems]}) of
-    <robot>; the caller decides whether an <inertial> problem matters (not on a link fixed
-    to the world, whose mass is dropped)."""
+@dataclass
+class _Parsed:
+    """What the elements of <robot> say, each checked on its own."""
+
+    links: list               # link names, in file order
+    inertias: dict            # link -> RigidBodyInertia or None (none, zero, or invalid)
+    joints: list              # _Joint of every joint with a name and a known type
+    bad_inertia: dict         # link -> [problems of its <inertial>]
+    geometry_only: list       # links with <visual>/<collision> but no <inertial>
+    left_out: list            # joints not in the tree: no name, unknown type, bad ends
+
+
+def _parse(robot, problems, notes) -> _Parsed:
+    """Every <link> and <joint> of <robot>, their problems appended; the caller decides
+    whether an <inertial> problem or a missing <inertial> matters (not on a link fixed to
+    the world, whose mass is dropped)."""
     if robot.tag != "robot":
         problems.append(f"the root element must be <robot>, got <{robot.tag}>")
     for child in robot:
@@ -376,33 +434,55 @@ def _parse(robot, problems, notes):
             notes.add("tags", f"<{child.tag}>")
     link_els = robot.findall("link")
     link_names = [el.get("name") for el in link_els]
-    if None in link_names:
-        problems.append("a <link> without a name attribute")
+    for k, n in enumerate(link_names):
+        if n is None or not n.strip():
+            what = "no name attribute" if n is None else f"an empty name {n!r}"
+            problems.append(f"<link> #{k + 1} has {what}: every link needs name=...")
+            link_names[k] = None
     dup = sorted({n for n in link_names if n is not None and link_names.count(n) > 1})
     if dup:
         problems.append(f"link names repeat: {dup}")
-    inertias, bad_inertia = {}, {}
-    for el in link_els:
+    inertias, bad_inertia, geometry_only = {}, {}, []
+    for k, (el, name) in enumerate(zip(link_els, link_names), start=1):
+        if name is None:                  # reported; its <inertial> is still checked
+            _read_inertial(el, problems, f"#{k} (no name)")
+            continue
         bad = []
-        inertias[el.get("name")] = _read_inertial(el, bad)
+        inertias[name] = _read_inertial(el, bad, name)
         if bad:
-            bad_inertia[el.get("name")] = bad
+            bad_inertia[name] = bad
         if el.find("visual") is not None or el.find("collision") is not None:
-            notes.add("visual", el.get("name"))
+            notes.add("visual", name)
+            if el.find("inertial") is None:
+                geometry_only.append(name)
         for child in el:
             if isinstance(child.tag, str) and child.tag not in _LINK_CHILDREN:
-                notes.add("tags", f"<{child.tag}> in link {el.get('name')!r}")
+                notes.add("tags", f"<{child.tag}> in link {name!r}")
     names = {n for n in link_names if n is not None}
-    joints = [j for j in (_read_joint(el, names, problems, notes)
-                          for el in robot.findall("joint")) if j is not None]
+    joints, left_out = [], []
+    for k, el in enumerate(robot.findall("joint"), start=1):
+        j = _read_joint(el, names, problems, notes)
+        if j is not None:
+            joints.append(j)
+        if j is None or j.parent not in names or j.child not in names:
+            left_out.append(el.get("name") or f"<joint> #{k} (no name)")
     jnames = [j.name for j in joints]
     dup = sorted({n for n in jnames if jnames.count(n) > 1})
     if dup:
         problems.append(f"joint names repeat: {dup}")
-    return [n for n in link_names if n is not None], inertias, joints, bad_inertia
+    return _Parsed([n for n in link_names if n is not None], inertias, joints, bad_inertia,
+                   geometry_only, left_out)
 
 
 # ============================================================================ the tree
+# what a failed stage leaves unchecked, said at the end of its problem
+_TREE_SKIPPED = ("; not checked because of it: the chain, frozen joints, the side file "
+                 "against the URDF, flexible links and the assembled model (they need one "
+                 "tree)")
+_CHAIN_SKIPPED = ("; not checked because of it: frozen joints, the side file against the "
+                  "URDF, flexible links and the assembled model (they need a chain)")
+
+
 @dataclass
 class _Tree:
     root: str
@@ -410,7 +490,11 @@ class _Tree:
     parent_joint: dict        # link -> joint
 
 
-def _tree(links, joints, problems):
+def _tree(links, joints, problems, left_out=()):
+    """The tree of ``links`` through ``joints`` (None, with the problem appended, when there
+    is no single root or a link is not reached from it); ``left_out``: joints not in it."""
+    why = (f" (joints {left_out} are left out of the tree because of their problems above)"
+           if left_out else "")
     children = {n: [] for n in links}
     parent_joint = {}
     for j in joints:
@@ -422,11 +506,14 @@ def _tree(links, joints, problems):
             parent_joint[j.child] = j
     roots = [n for n in links if n not in parent_joint]
     if not links:
-        problems.append("the URDF has no <link>")
+        problems.append("the URDF has no <link> (a <robot> needs at least one <link name=...>)"
+                        + _TREE_SKIPPED)
         return None
     if len(roots) != 1:
         problems.append(f"the URDF must have exactly one root link (a link that is no joint's "
-                        f"child), found {roots}")
+                        f"child), found {roots}" + ("; every link is some joint's child, so "
+                                                    "the joints form a loop" if not roots else "")
+                        + why + _TREE_SKIPPED)
         return None
     reached, todo = {roots[0]}, [roots[0]]
     while todo:
@@ -437,7 +524,7 @@ def _tree(links, joints, problems):
     lost = [n for n in links if n not in reached]
     if lost:
         problems.append(f"links {lost} are not connected to the root link {roots[0]!r} "
-                        "(a cycle of joints?)")
+                        "(a cycle of joints?)" + why + _TREE_SKIPPED)
         return None
     return _Tree(roots[0], children, parent_joint)
 
@@ -718,33 +805,41 @@ def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
                     must be listed here.
     flexible      : {link name: FlexibleLink(...)} (or the older (BeamProperties, n)
                     along +x); the link's <inertial> is replaced by the RFEM beam.
-    massless_links: chain links expected to carry no mass (no note for them); a massless
-                    chain link is accepted whenever M stays positive definite.
+    massless_links: moving links expected to carry no mass (no note for them, and a link
+                    with geometry but no <inertial> is then accepted); a massless chain
+                    link is accepted whenever M stays positive definite.
     gravity       : (3,) m/s^2 in the URDF root (= gpme world) frame; None: the side
                     file's, else (0, 0, -9.81).
     name          : model name; None: the side file's, else the URDF robot name.
 
     Returns an :class:`UrdfReadResult`; raises ModelFileError listing every problem found
-    in the XML, the side file, the inertials, joints, chain choice, frozen values, flexible
-    specs and the built model.
+    in one read: the XML, the side file (every key and record), the links' inertials, the
+    joints, the tree, the chain choice, frozen values, flexible specs, the side file
+    against the URDF and the built model.  A stage that cannot run because an earlier one
+    failed (no tree, no chain) is named in the problem that stopped it.
     """
     path = Path(path)
+    source = str(path)
     problems = []
     try:
-        text = path.read_text(encoding="utf-8")
+        data = path.read_bytes()
     except OSError as exc:
-        text = None
-        problems.append(f"cannot read the URDF ({exc})")
+        data = None
+        kind = ("it is a directory, not a file" if path.is_dir() else
+                "no such file" if not path.exists() else (exc.strerror or str(exc)))
+        problems.append(f"cannot read the URDF ({kind}); a URDF is an XML file "
+                        "<robot name=...> with <link> and <joint> elements")
     side = None
     if side_file == "auto":
-        if side_file_path(path).exists():
+        if data is not None and side_file_path(path).exists():
             side, bad = read_side_file(side_file_path(path))
             problems += bad
     elif side_file is not None:
         side, bad = read_side_file(side_file)
         problems += bad
-    return _read(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
-                 massless_links=massless_links, gravity=gravity, name=name, source=str(path))
+    return _read_guarded(data, side, problems, chain=chain, frozen=frozen, flexible=flexible,
+                         massless_links=massless_links, gravity=gravity, name=name,
+                         source=source)
 
 
 def read_urdf(path, side_file="auto", flexible=None, massless_links=(), gravity=None,
@@ -756,19 +851,38 @@ def read_urdf(path, side_file="auto", flexible=None, massless_links=(), gravity=
 
 def parse_urdf(text, side=None, flexible=None, massless_links=(), gravity=None, name=None,
                source="<urdf>", *, chain=None, frozen=None) -> Model:
-    """:func:`read_urdf` on URDF ``text`` and a side-file dict ``side`` (or None)."""
+    """:func:`read_urdf` on URDF ``text`` (str or bytes) and a side-file dict ``side`` (or
+    None)."""
     problems = []
     if side is not None:
-        problems = side_file_problems(side)
-        side = None if problems else side
-    return _read(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
-                 massless_links=massless_links, gravity=gravity, name=name,
-                 source=source).model
+        side, problems = check_side_file(side)
+    return _read_guarded(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
+                         massless_links=massless_links, gravity=gravity, name=name,
+                         source=source).model
 
 
 def _fail(source, problems):
     raise ModelFileError([p if p.startswith(source) or p.startswith("side file")
                           else f"{source}: {p}" for p in problems])
+
+
+def _read_guarded(text, side, problems, **kwargs) -> UrdfReadResult:
+    """:func:`_read`, with any exception that escaped the checks turned into a
+    ModelFileError naming the file, the exception and every problem found before it
+    (the checks are meant to catch every malformed input first; this is the net)."""
+    source = kwargs["source"]
+    try:
+        return _read(text, side, problems, **kwargs)
+    except ModelFileError:
+        raise
+    except ModelError as exc:
+        _fail(source, problems + list(exc.problems))
+    except (ArithmeticError, AttributeError, LookupError, TypeError, ValueError,
+            RecursionError) as exc:
+        _fail(source, problems + [
+            f"reading stopped at an unexpected {type(exc).__name__} ({exc}): a malformed "
+            "input gpme's URDF checks do not name yet; the problems above were found "
+            "before it (please report the file)"])
 
 
 def _read(text, side, problems, *, chain, frozen, flexible, massless_links, gravity, name,
@@ -779,20 +893,28 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
         try:
             robot = ET.fromstring(text)
         except ET.ParseError as exc:
-            problems.append(f"not well-formed XML ({exc})")
+            line, column = exc.position
+            problems.append(f"not well-formed XML at line {line}, column {column + 1} ("
+                            f"{_xml_error(exc)}); nothing else in the URDF could be checked")
     if robot is None:
         _fail(source, problems)
     frozen = dict(frozen or {})
     flexible = dict(flexible or {})
-    links, inertias, joints, bad_inertia = _parse(robot, problems, notes)
-    tree = _tree(links, joints, problems)
+    side = side or {}
+    parsed = _parse(robot, problems, notes)
+    links, inertias, joints = parsed.links, parsed.inertias, parsed.joints
+    bad_inertia, geometry_only = parsed.bad_inertia, parsed.geometry_only
+    tree = _tree(links, joints, problems, parsed.left_out)
     picked = _select_chain(tree, chain, frozen, problems) if tree is not None else None
     if picked is None:
+        if tree is not None:
+            problems[-1] += _CHAIN_SKIPPED
         _fail(source, [p for bad in bad_inertia.values() for p in bad] + problems)
     root, tip, chain_joints = picked
     above = _path(tree, tree.root, root)
     values = _frozen_values(tree, joints, chain_joints, above, frozen, problems, notes)
     chain_index = {j.name: k for k, j in enumerate(chain_joints)}
+    chain_names = [j.name for j in chain_joints]
 
     # owner chain index of every link (-1: fixed to the world) and its pose in that link
     owner, pose, attached = {tree.root: -1}, {tree.root: np.eye(4)}, {}
@@ -819,6 +941,17 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
         notes.line("invalid <inertial> on links fixed to the world ignored (they do not move, "
                    "their mass is dropped): " + "; ".join(
                        p for lk in world_fixed_bad for p in bad_inertia[lk]))
+    side_massless = list(side.get("massless_links", []))
+    allowed_massless = set(massless_links) | set(side_massless)
+    for lk in geometry_only:
+        k = owner.get(lk, -1)
+        if k >= 0 and lk not in allowed_massless and lk not in flexible:
+            problems.append(
+                f"link {lk!r} has <visual>/<collision> geometry but no <inertial>, and it "
+                f"moves (with joint {chain_joints[k].name!r}): its mass would be read as 0; "
+                "give it an <inertial> (mass in kg, inertia in kg m^2 about its centre of "
+                "mass), or an explicit zero <inertial> (mass 0, all six moments 0) if it "
+                "truly carries no mass")
 
     dropped = [f"{lk} ({inertias[lk].mass:g} kg)" for lk in owner
                if owner[lk] == -1 and inertias.get(lk) is not None]
@@ -833,14 +966,33 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
             notes.line(f"frozen joints {branch} hang on chain link {lk!r}: the links below "
                        f"them merged into it as mass and frames ({len(moved)} with mass)")
 
-    # side file, flexible specs
-    side = side or {}
-    side_flex = {r["name"]: r for r in side.get("flexible_links", [])}
+    # the side file against the URDF (its own problems were found on reading it)
     side_joints = side.get("joints", {})
     unknown = sorted(set(side_joints) - set(chain_index))
     if unknown:
         problems.append(f"the side file gives springs for joints {unknown} that are not moving "
-                        f"joints of the chain {[j.name for j in chain_joints]}")
+                        f"joints of the chain {chain_names}")
+    side_drives = []
+    for rec in side.get("drives", []):
+        if rec["joint"] in chain_index:
+            side_drives.append(rec)
+        else:
+            problems.append(f"the side file's drive record on {rec['joint']!r} "
+                            f"({rec['function']}): not a moving joint of the chain "
+                            f"{chain_names}")
+    unknown = [lk for lk in side_massless if lk not in tree.children]
+    if unknown:
+        problems.append(f"the side file's massless_links {unknown} are not links of the URDF")
+    side_flex = {}
+    for rec in side.get("flexible_links", []):
+        lost = ([f"joint {j!r}" for j in rec["joints"] if j not in chain_index]
+                + [f"link {lk!r}" for lk in rec["links"] if lk not in chain_links])
+        if lost:
+            problems.append(f"the side file's flexible link record {rec['name']!r} names "
+                            f"{', '.join(lost)}, not in the chain (joints {chain_names}, "
+                            f"links {chain_links})")
+        else:
+            side_flex[rec["name"]] = rec
     plans = {}
     for lk, spec in flexible.items():
         if lk not in chain_links:
@@ -854,17 +1006,25 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
             continue
         k = chain_links.index(lk)
         plans[lk] = _beam_plan(lk, spec, chain_origin.get(k + 1), problems)
-    allowed_massless = set(massless_links) | set(side.get("massless_links", []))
     massless = [lk for k, lk in enumerate(chain_links) if lk not in allowed_massless
                 and lk not in flexible and inertias.get(lk) is None and lk not in bad_inertia
+                and lk not in geometry_only
                 and all(inertias.get(x) is None for x in attached.get(k, []))]
     if massless:
         notes.line("chain links without mass (accepted: the mass matrix is checked positive "
                    "definite): " + ", ".join(massless))
 
+    size_problem = _size_problem(tree, owner, inertias)
+    if size_problem:
+        problems.append(size_problem)
+        _fail(source, problems)
+
     # build (also when earlier problems exist, to report the model's own problems too)
     g = gravity if gravity is not None else side.get("gravity", STANDARD_GRAVITY)
-    builder = ChainBuilder(name or side.get("model") or robot.get("name") or "urdf", gravity=g)
+    robot_name = (robot.get("name") or "").strip()
+    if not (name or side.get("model") or robot_name):
+        notes.line("<robot> without a name: the model is named 'urdf'")
+    builder = ChainBuilder(name or side.get("model") or robot_name or "urdf", gravity=g)
     frames = []
     model = None
     try:
@@ -901,7 +1061,7 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
                     builder.add_body(inertias[x], origin=after @ pose[x])
                 builder.add_frame(x, after @ pose[x])
                 frames.append(x)
-        for rec in side.get("drives", []):
+        for rec in side_drives:
             builder.add_drive(rec["joint"], drive_function(rec))
         model = builder.build()
         model = _with_flexible_records(model, side_flex, flexible)
@@ -909,32 +1069,52 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
         suffix = (" (found with the invalid <inertial> elements above left out)"
                   if set(bad_inertia) - set(world_fixed_bad) else "")
         problems += [p + suffix for p in exc.problems]
-    except TypeError as exc:
-        problems.append(str(exc))
     if problems:
         _fail(source, problems)
     return UrdfReadResult(model, notes.lines(), MappingProxyType(dict(values)), (root, tip),
                           tuple(j.name for j in chain_joints), tuple(frames))
 
 
+def _size_problem(tree, owner, inertias) -> Optional[str]:
+    """The problem when the moving masses at the lengths of the tree give an inertia about
+    the root (sum m * L^2 + tr I, L the sum of every joint offset) above _MAGNITUDE."""
+    offsets = [(math.hypot(*j.origin[:3, 3]), j.name)
+               for js in tree.children.values() for j in js]
+    moving = [inertias[lk] for lk, k in owner.items() if k >= 0 and inertias.get(lk) is not None]
+    if not offsets or not moving:
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        length = sum(d for d, _ in offsets) + max(math.hypot(*i.com_array) for i in moving)
+        mass = sum(float(i.mass) for i in moving)
+        size = mass * length * length + sum(float(np.trace(i.inertia_array)) for i in moving)
+    if size < _MAGNITUDE:
+        return None
+    far, joint = max(offsets)
+    return (f"the moving links' mass {mass:.3g} kg at up to {length:.3g} m from the root "
+            f"(the largest joint offset: joint {joint!r}, {far:.3g} m) give an inertia of "
+            f"{size:.3g} kg m^2, too large to compute with (at most {_MAGNITUDE:g}; real "
+            "machines have < 1e12): check the units of <origin xyz> (m) and <mass> (kg); "
+            "the assembled model was not checked because of it")
+
+
+def _xml_error(exc: ET.ParseError) -> str:
+    """The parser's reason without the position it repeats."""
+    text = str(exc)
+    return text.split(":")[0] if ": line " in text else text
+
+
 def _with_flexible_records(model, side_flex, flexible):
-    """Add the side file's RFEM records (beams not re-discretised on reading)."""
+    """Add the side file's RFEM records (beams not re-discretised on reading; their joints
+    and links checked to be in the chain)."""
     records = list(model.flexible_links)
-    problems = []
+    link_names = [lk.name for lk in model.links]
     for name, rec in side_flex.items():
         if name in flexible:
             continue
-        try:
-            joints = tuple(model.index(j) for j in rec["joints"])
-            links = tuple([lk.name for lk in model.links].index(lk) for lk in rec["links"])
-        except (ModelError, ValueError):
-            problems.append(f"side file flexible link {name!r}: its joints {rec['joints']} or "
-                            f"links {rec['links']} are not all in the URDF chain")
-            continue
+        joints = tuple(model.index(j) for j in rec["joints"])
+        links = tuple(link_names.index(lk) for lk in rec["links"])
         records.append(FlexibleLinkInfo(name, BeamProperties(**rec["beam"]), rec["n_segments"],
                                         joints, links))
-    if problems:
-        raise ModelFileError(problems)
     if len(records) == len(model.flexible_links):
         return model
     order = {lk.name: k for k, lk in enumerate(model.links)}
