@@ -8,7 +8,10 @@ Modules, one job each:
   store    the resume store: one JSON file per finished point, keyed by a hash
   runner   runs the pending points on a Dask cluster (local by default), writes the table
   plots    heat maps over two parameters with the infeasible and the safe region marked
-  command  the `gpme sweep` arguments and their translation into a spec
+  cost     the wall time, output and memory of a sweep, estimated before it starts
+           (measured warm-up runs), and the limits it is refused above without --force
+  command  the `gpme sweep` arguments, the checks of every input, then the estimate, the
+           run, the table and the plots
 With a model file (`gpme sweep --model FILE`) instead of the built-in crane:
   model_paths    the sweepable numbers of a model file, named by dotted paths
   model_spec     the sweep's run settings and validation for a model file

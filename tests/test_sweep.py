@@ -379,3 +379,76 @@ def test_killed_sweep_keeps_whole_points_and_resumes_to_the_same_values(tmp_path
     table = pd.read_csv(out / "results.csv")
     assert len(table) == 8 and (table.status == "ok").all()
     assert time.perf_counter() - start < 90
+
+
+# ------------------------------------------------------------------ cost, progress, lists
+TINY = ["--n-rfe", "0", "--t-end", "0.3", "--transient", "0.1", "--in-process"]
+
+
+def test_list_points_setting_different_parameters_run_at_the_defaults(tmp_path, capsys):
+    out = tmp_path / "list"
+    code = gpme_main(["sweep", "--point", "A=0.3", "--point", "T=2", *TINY, "--out", str(out)])
+    assert code == 0
+    table = pd.read_csv(out / "results.csv")
+    defaults = CraneParameters()
+    assert table.amplitude.tolist() == [0.3, defaults.amplitude]
+    assert table.period.tolist() == [defaults.period, 2.0]
+    assert (table.status == "ok").all()
+    # each point is the crane with what it sets: the same key as the full point
+    settings = RunSettings(t_end=0.3, transient=0.1, n_rfe=0)
+    assert table.key[0] == point_key({"amplitude": 0.3, "n_rfe": 0}, settings)
+    # the two points are not a grid: scatter maps over (amplitude, period)
+    assert (out / "plots" / "heatmap_drive_psi3_peak_Nm.png").stat().st_size > 1000
+
+
+def test_estimate_is_printed_before_the_run_and_force_runs_above_the_limit(
+        tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("gpme_study.cost.MAX_WALL_S", 1e-3)
+    argv = ["sweep", "--param", "A=0.2,0.3", *TINY, "--out", str(tmp_path / "s")]
+    assert gpme_main(argv) == 2
+    captured = capsys.readouterr()
+    assert "estimate: 2 points x" in captured.out
+    assert "above the limit of 1 ms" in captured.err and "--force" in captured.err
+    assert not (tmp_path / "s").exists()
+    assert gpme_main(argv + ["--force"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    first = next(k for k, line in enumerate(lines) if line.startswith("estimate: "))
+    assert lines[first + 1].startswith("--force given, running although the sweep is "
+                                       "estimated at")
+    assert lines[first + 2] == "2 points (2 distinct): 0 already done, 2 to run"
+
+
+def test_estimate_of_a_run_follows_its_steps():
+    from gpme_study.cost import ROW_PASSES, Sampler, crane_point_plans
+    sampler = Sampler(lambda line: None)
+    point = {"amplitude": 0.3, "n_rfe": 0}
+    short, long_ = (crane_point_plans(point, RunSettings(t_end=t, n_rfe=0, transient=0.1,
+                                                         dt=1e-3), sampler)[0]
+                    for t in (0.5, 5.0))
+    assert (short.steps, long_.steps) == (500, 5000)
+    assert (short.rows, long_.rows) == (251, 2501)
+    # one measurement (the first run's) prices both: per step, per row (history and
+    # metrics), once per run
+    assert list(sampler.costs) == [("crane", 0)]
+    c = sampler.costs[("crane", 0)]
+    assert c.step_s > 0 and c.row_s > 0 and c.fixed_s >= 0
+    for plan in (short, long_):
+        assert plan.seconds == pytest.approx(
+            c.fixed_s + plan.steps * c.step_s + plan.rows * ROW_PASSES * c.row_s, rel=1e-12)
+
+
+def test_progress_in_a_log_is_a_few_lines_with_the_counts():
+    from gpme_study.runner import MAX_LOG_LINES, PointProgress
+    lines = []
+    progress = PointProgress(lines.append, 500, terminal=False)
+    for k in range(500):
+        progress.point(f"k{k}", {"status": "ok" if k % 10 else "infeasible"})
+    assert len(lines) <= MAX_LOG_LINES + 1
+    assert lines[-1].startswith("[500/500] 50 infeasible, 450 ok; ")
+    on_terminal = []
+    progress = PointProgress(on_terminal.append, 3, terminal=True)
+    for k in range(3):
+        progress.point(f"k{k}", {"status": "ok", "wall_time_s": 1.0})
+    assert [line.split(";")[0] for line in on_terminal] == ["[1/3] k0 ok 1.0 s",
+                                                             "[2/3] k1 ok 1.0 s",
+                                                             "[3/3] k2 ok 1.0 s"]
