@@ -57,7 +57,7 @@ def default_scenarios(step, quick):
     return [crane_scenario(0), crane_scenario(3)]
 
 
-def _paper_step(run_dir, quick, progress):
+def _paper_step(run_dir, quick, progress, max_wall_s=None):
     """The paper's two crane runs, with the paper's figures (default run)."""
     from gpme_examples import paper
     from gpme_io.scenario import crane_scenario
@@ -67,7 +67,8 @@ def _paper_step(run_dir, quick, progress):
     for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
         _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
              f"{paper.DEFAULT_DT[case]:g} s)")
-        runs[case] = paper.run_case(case, t_end=t_end, progress=progress)
+        runs[case] = paper.run_case(case, t_end=t_end, progress=progress,
+                                    max_wall_s=max_wall_s)
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
         rows += run_rows(crane_scenario(n), runs[case])
     paper.write_outputs(runs, run_dir / "paper")
@@ -76,14 +77,15 @@ def _paper_step(run_dir, quick, progress):
     return df, runs
 
 
-def _models_step(run_dir, scenarios, quick, progress):
+def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     """Each scenario's own gpme run: history, figures and the run checks."""
     from gpme.runs import simulate_scenario, write_run_outputs
     from .run_checks import rows_frame, run_rows
     rows = []
     for scenario in scenarios:
         _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
-        df = simulate_scenario(scenario, quick=quick, progress=progress)
+        df = simulate_scenario(scenario, quick=quick, progress=progress,
+                               max_wall_s=max_wall_s)
         _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
         write_run_outputs(scenario, df, run_dir / "runs")
         rows += run_rows(scenario, df)
@@ -220,12 +222,13 @@ def _models_record(scenarios):
 
 
 def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None,
-               keep=None):
+               keep=None, max_wall_s=None):
     """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
 
     scenarios: gpme_io.scenario.Scenario list (``--model`` files); None runs the paper's
     crane (its two runs with the paper's figures, and the default crane cases per engine).
     keep     : after publishing, keep only this many newest runs in root (None: all).
+    max_wall_s: s, each gpme run stopped after this long (None: no limit).
     Staging directories of dead runs in root are removed first.
     """
     root = Path(root)
@@ -236,7 +239,8 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
         _say(f"removed {root / name}: the partial directory of a run that died")
     staging = _claim_run_dir(root, run_id)
     try:
-        result = _run_steps(root, staging, run_id, quick, only, progress, scenarios)
+        result = _run_steps(root, staging, run_id, quick, only, progress, scenarios,
+                            max_wall_s)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
@@ -245,7 +249,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     return result
 
 
-def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
+def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None):
     from .run_checks import run_warnings
     start = time.perf_counter()
     tables, runs, timings = {}, None, {}
@@ -260,9 +264,10 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios):
         try:
             if step == "gpme":
                 if scenarios is None:
-                    tables[step], runs = _paper_step(staging, quick, progress)
+                    tables[step], runs = _paper_step(staging, quick, progress, max_wall_s)
                 else:
-                    tables[step] = _models_step(staging, scenarios, quick, progress)
+                    tables[step] = _models_step(staging, scenarios, quick, progress,
+                                                max_wall_s)
             else:
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
                 tables[step] = _engine_step(step, staging, chosen, quick, progress)
@@ -360,6 +365,7 @@ def estimate_runs(scenarios, quick, force):
 
 
 def main(args):
+    from gpme.budget import wall_limit
     from gpme_core.errors import GpmeError
     scenarios = None
     if getattr(args, "model", None):
@@ -376,7 +382,8 @@ def main(args):
         return 2
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
                                      progress=not args.no_progress, scenarios=scenarios,
-                                     keep=getattr(args, "keep", None))
+                                     keep=getattr(args, "keep", None),
+                                     max_wall_s=wall_limit(getattr(args, "force", False)))
     cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "status"]
     status = summary.apply(_status, axis=1)

@@ -7,6 +7,9 @@ from gpme_core.errors import GpmeError
 # s: a run estimated to take longer is refused without --force (an hour: a verification or a
 # study run; longer runs are deliberate and should say so)
 MAX_WALL_S = 3600.0
+# s: a run still going after this long is stopped unless --force (the estimate of an adaptive
+# method is a lower bound or unknown; RK4's may be off by the machine's load, hence 2x)
+RUN_WALL_LIMIT_S = 2 * MAX_WALL_S
 # bytes: a run whose history CSV is estimated above this is refused without --force
 MAX_CSV_BYTES = 2e9
 
@@ -30,6 +33,12 @@ def over_budget(cost):
 
 def _hours(s):
     return f"{s / 3600:.3g} h" if s >= 3600 else f"{s / 60:.3g} min"
+
+
+def wall_limit(force):
+    """s: the ``max_wall_s`` of gpme_core.integrate.simulate for a command (None with
+    --force)."""
+    return None if force else RUN_WALL_LIMIT_S
 
 
 def run_budget(label, force=False, out=sys.stdout):

@@ -87,7 +87,7 @@ def load_scenarios(paths):
 
 def _simulate_paper(args):
     """The paper's two crane runs with the paper's figures (no --model)."""
-    from gpme.budget import run_budget
+    from gpme.budget import run_budget, wall_limit
     from gpme_examples import paper
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     t_end = args.t_end or (CRANE_QUICK_T_END if args.quick else CRANE_T_END)
@@ -99,7 +99,8 @@ def _simulate_paper(args):
         runs[case] = paper.run_case(case, n_rfe=n_rfe, t_end=t_end, dt=args.dt,
                                     method=args.method or "RK4", on_manifold=args.on_manifold,
                                     static_arm=args.static_arm, progress=not args.no_progress,
-                                    before_run=run_budget(label, args.force))
+                                    before_run=run_budget(label, args.force),
+                                    max_wall_s=wall_limit(args.force))
         s = paper.summary(runs[case], transient=min(2.0, 0.5 * t_end))
         print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
               f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
@@ -115,7 +116,7 @@ def _simulate_paper(args):
 
 
 def _simulate_models(args):
-    from gpme.budget import run_budget
+    from gpme.budget import run_budget, wall_limit
     from gpme.runs import simulate_scenario, write_run_outputs
     from crosscheck.run_checks import WARNING, run_rows
     paths = {}
@@ -125,7 +126,8 @@ def _simulate_models(args):
               f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
         df = simulate_scenario(scenario, t_end=t_end, dt=args.dt, method=args.method,
                                progress=not args.no_progress,
-                               before_run=run_budget(scenario.name, args.force))
+                               before_run=run_budget(scenario.name, args.force),
+                               max_wall_s=wall_limit(args.force))
         print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
         for row in run_rows(scenario, df):
             if row["status"] == "info":

@@ -23,14 +23,14 @@ def resolved_step(scenario, dt=None):
 
 
 def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
-                      output_dt=None, before_run=None, estimate_only=False):
+                      output_dt=None, before_run=None, estimate_only=False, max_wall_s=None):
     """History DataFrame of ``scenario`` from its initial state.
 
     t_end  : s, default scenario.t_run(quick)
     dt     : s, RK4 step, default :func:`resolved_step`
     method : one of gpme_core.integrate.METHODS, default the scenario's integrator; with an
              adaptive method a given dt is its largest step
-    before_run, estimate_only : as gpme_core.integrate.simulate (the run's cost)
+    before_run, estimate_only, max_wall_s : as gpme_core.integrate.simulate
     """
     method = method or scenario.integrator
     if method not in METHODS:
@@ -40,7 +40,7 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
     step = resolved_step(scenario, dt) if method == "RK4" else dt
     df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
                   output_dt=out_dt, progress=progress, dt=step, before_run=before_run,
-                  estimate_only=estimate_only)
+                  estimate_only=estimate_only, max_wall_s=max_wall_s)
     if estimate_only:
         return df
     df.attrs["scenario"] = scenario.name

@@ -38,6 +38,10 @@ N_WORK = 3
 DIVERGENCE_LIMIT = 1e6
 # entries of the state named in a divergence message
 MESSAGE_ENTRIES = 6
+# progress of the solve_ivp methods: t_end in this many parts (their steps are not known)
+SCIPY_PROGRESS_UNITS = 1000
+# evaluations between two looks at the clock (progress and the wall-time limit)
+WALL_CHECK_EVERY = 200
 # s between two progress lines when stderr is not a terminal
 LOG_LINE_SECONDS = 30.0
 # a recorded history above this many bytes in memory is refused before the run
@@ -147,7 +151,8 @@ def rk4_step_plan(t_end, dt, output_dt):
     return step, max(1, int(round(output_dt / step)))
 
 
-def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None):
+def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None,
+         max_wall_s=None):
     n_steps = int(round(t_end / dt))
     ts, ys = [0.0], [y0.copy()]
     y = y0.copy()
@@ -161,6 +166,8 @@ def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None):
             k4 = rhs(t + dt, y + dt * k3)
             y = y + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             _check_state(model, t + dt, y, n, dt)
+            if max_wall_s is not None and k % WALL_CHECK_EVERY == 0:
+                _check_wall(bar.start, max_wall_s, t + dt, t_end, "RK4")
             if (k + 1) % record_every == 0 or k + 1 == n_steps:
                 ts.append((k + 1) * dt)
                 ys.append(y.copy())
@@ -217,6 +224,20 @@ def _raise_with_singular_sets(system, exc):
                               f"{'; '.join(hints)}") from None
 
 
+def _check_wall(start, max_wall_s, t, t_end, method):
+    """Stop a run that has used more than max_wall_s of wall time (None: no limit)."""
+    if max_wall_s is None:
+        return
+    elapsed = time.perf_counter() - start
+    if elapsed > max_wall_s:
+        raise SimulationError(
+            f"stopped after {elapsed:.3g} s of wall time (the limit is {max_wall_s:.3g} s) "
+            f"at t = {t:.6g} s of t_end = {t_end:.6g} s ({method}); at this rate the run "
+            f"would take about {elapsed * t_end / max(t, 1e-300) / 3600:.3g} h. Shorten "
+            "t_end, use a method suited to the model (Radau for stiff models, RK4 with a "
+            "stable step otherwise), or lift the limit (--force)")
+
+
 class Progress:
     """Progress of a run over ``total`` steps up to ``t_end`` s: a tqdm bar on a terminal;
     elsewhere (CI logs, files) at most one line per tenth of the run and per
@@ -258,11 +279,22 @@ class Progress:
             self.bar.close()
 
 
-def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=None):
+def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=None,
+           progress=False, max_wall_s=None):
     t_eval = np.linspace(0.0, t_end, int(round(t_end / output_dt)) + 1)
+    bar = Progress(progress, SCIPY_PROGRESS_UNITS, t_end, method)
+    start = time.perf_counter()
+    calls = [0, 0]          # evaluations, progress units reached
 
     def checked(t, y):
         _check_state(model, t, y, n)
+        calls[0] += 1
+        if calls[0] % WALL_CHECK_EVERY == 0:
+            reached = int(SCIPY_PROGRESS_UNITS * min(t / t_end, 1.0))
+            if reached > calls[1]:
+                calls[1] = reached
+                bar.update(reached)
+            _check_wall(start, max_wall_s, t, t_end, method)
         return rhs(t, y)
     options = {} if max_step is None else {"max_step": max_step}
     if method in IMPLICIT_METHODS:
@@ -274,8 +306,11 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
         sparsity[:n, n:2 * n] = np.eye(n, dtype=bool)
         sparsity[n:, :2 * n] = True
         options["jac_sparsity"] = sparsity
-    res = solve_ivp(checked, (0.0, t_end), y0, method=method, t_eval=t_eval, rtol=rtol,
-                    atol=atol, **options)
+    try:
+        res = solve_ivp(checked, (0.0, t_end), y0, method=method, t_eval=t_eval, rtol=rtol,
+                        atol=atol, **options)
+    finally:
+        bar.close()
     if not res.success:
         raise SimulationError(f"solve_ivp({method}) failed at t = {res.t[-1] if len(res.t) else 0:.6g} s:"
                               f" {res.message}")
@@ -285,7 +320,7 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
 def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
              switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
-             estimate_only=False):
+             estimate_only=False, max_wall_s=None):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
@@ -303,6 +338,8 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                  step; it may raise to refuse the run (the CLI's budget does).  With
                  ``progress`` the first call's numba compilation is announced on stderr.
     estimate_only: check the inputs and the step, then return the RunCost without running
+    max_wall_s : s, stop the run with a SimulationError once it has taken this long (None:
+                 no limit); the guard for methods whose cost is not known before the run
     method     : "RK4" (fixed step) or a solve_ivp method: "RK45", "DOP853", "Radau"
     output_dt  : s, spacing of the recorded rows (a multiple of dt for RK4)
     on_manifold: start on the constraints: dependent q and q_dot solved from Phi = 0,
@@ -420,12 +457,13 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     start = time.perf_counter()
     nfev = None
     if method == "RK4":
-        ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition)
+        ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition,
+                      max_wall_s)
         nfev = 4 * int(round(t_end / dt))
     else:
         try:
             ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n,
-                                  max_step=dt)
+                                  max_step=dt, progress=progress, max_wall_s=max_wall_s)
         except (SimulationError, ConstraintError) as exc:
             _raise_with_singular_sets(start_system, exc)
             raise

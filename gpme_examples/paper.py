@@ -18,12 +18,12 @@ DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_manifold=False,
              params=CraneParameters(), progress=False, output_dt=1e-3, static_arm=False,
-             before_run=None, estimate_only=False):
+             before_run=None, estimate_only=False, max_wall_s=None):
     """One run of the paper: case 'rigid' or 'flexible'; returns the history DataFrame.
     static_arm: start the flexible arm in its gravity sag instead of straight.
     dt: s, RK4 step (default DEFAULT_DT up to DEFAULT_N_RFE segments, else half the
     stability limit, gpme_core.stability); with an adaptive method its largest step.
-    before_run, estimate_only: as gpme_core.integrate.simulate (the run's cost)."""
+    before_run, estimate_only, max_wall_s: as gpme_core.integrate.simulate."""
     n = 0 if case == "rigid" else n_rfe
     system = crane_system(n, params)
     q0, qd0 = initial_state(system.model, params, static_arm=static_arm and n > 0)
@@ -31,7 +31,7 @@ def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_ma
         dt = DEFAULT_DT[case]
     df = simulate(system, t_end, q0, qd0, dt=dt, method=method, on_manifold=on_manifold,
                   progress=progress, output_dt=output_dt, before_run=before_run,
-                  estimate_only=estimate_only)
+                  estimate_only=estimate_only, max_wall_s=max_wall_s)
     if estimate_only:
         return df
     df.attrs["case"] = case

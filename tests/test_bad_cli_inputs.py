@@ -300,3 +300,15 @@ def test_a_pole_stepped_over_is_named(method, tmp_path):
         simulate(scenario.system, 0.1, scenario.q0, scenario.q_dot0, method=method,
                  dt=1e-3 if method == "RK4" else None)
     assert "division: where t - 0.0301 = 0" in str(exc.value)
+
+
+@pytest.mark.parametrize("method", ["RK4", "RK45", "Radau"])
+def test_wall_time_limit_stops_a_run(crane, method):
+    """The guard of the runs whose cost is not known before: every method looks at the clock
+    every WALL_CHECK_EVERY evaluations and stops with the rate it reached."""
+    from gpme_core.errors import SimulationError
+    system, q0, q_dot0 = crane
+    with pytest.raises(SimulationError, match=r"stopped after .* s of wall time \(the limit "
+                                              r"is 1e-09 s\) at t = .* of t_end = 1 s "
+                                              rf"\({method}\).*--force"):
+        simulate(system, 1.0, q0, q_dot0, method=method, max_wall_s=1e-9)
