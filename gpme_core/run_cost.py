@@ -22,6 +22,9 @@ CSV_BYTES_PER_VALUE = 25
 MEMORY_COPIES = 3
 # evaluations timed to measure the cost of one (after the first, which may compile)
 TIMED_EVALUATIONS = 20
+# ... in this many batches, the median batch counted (one busy moment of a shared machine
+# does not set the estimate)
+TIMED_BATCHES = 5
 # wall time per evaluation over the bare reduced solve: the state update, the divergence
 # and joint-range check per step, and building the history (one more solve per row);
 # measured 1.3-1.4 on the crane (n_rfe = 3, RK4, 0.05 s)
@@ -110,8 +113,8 @@ def kernels_compiled():
 def time_evaluation(system, q0, q_dot0, announce=True):
     """(compile_s, seconds_per_eval): the first reduced solve at (0, q0, q_dot0) timed on its
     own (it compiles the numba kernels, or loads them from their cache, when this process has
-    not yet; with ``announce`` that is said on stderr before it starts), then the mean of
-    TIMED_EVALUATIONS more.
+    not yet; with ``announce`` that is said on stderr before it starts), then the median over
+    TIMED_BATCHES batches of TIMED_EVALUATIONS more.
 
     system : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
     """
@@ -124,10 +127,13 @@ def time_evaluation(system, q0, q_dot0, announce=True):
     first = time.perf_counter() - start
     if compiling and announce:
         print(f"  compiled in {first:.1f} s", file=sys.stderr, flush=True)
-    start = time.perf_counter()
-    for _ in range(TIMED_EVALUATIONS):
-        system.solve(0.0, q0, q_dot0)
-    return first, (time.perf_counter() - start) / TIMED_EVALUATIONS
+    batches = []
+    for _ in range(TIMED_BATCHES):
+        start = time.perf_counter()
+        for _ in range(TIMED_EVALUATIONS // TIMED_BATCHES):
+            system.solve(0.0, q0, q_dot0)
+        batches.append((time.perf_counter() - start) / (TIMED_EVALUATIONS // TIMED_BATCHES))
+    return first, float(np.median(batches))
 
 
 def estimate_run(method, t_end, output_dt, n_coordinates, columns, seconds_per_eval,
