@@ -30,8 +30,9 @@ from pathlib import Path
 from typing import Optional
 
 from .model_paths import PathError, read_model_document
-from .spec import (MODES, SweepSpec, SweepSpecError, _grid_points, _lhs_points, _limits,
-                   _list_points, _number, _plot_axes, _swept, fill_defaults)
+from .spec import (MAX_N_RFE, MODES, SweepSpec, SweepSpecError, _grid_points,
+                   _grid_values, _lhs_points, _limits, _list_points, _number, _plot_axes,
+                   _range, _swept, fill_defaults)
 
 MODEL_TOP_KEYS = ("model", "mode", "parameters", "points", "samples", "seed", "run", "limits",
                   "plot")
@@ -94,11 +95,16 @@ class ModelSpace:
             return None
 
     def check(self, name, value, where, problems):
+        named = where if where.endswith(name) else f"{where}: {name}"
         try:
-            self.document.coerce(name, value)
+            x = self.document.coerce(name, value)
         except (ValueError, TypeError) as exc:
-            named = where if where.endswith(name) else f"{where}: {name}"
             problems.append(f"{named}: {exc}")
+            return
+        if isinstance(x, int) and x > MAX_N_RFE:
+            problems.append(f"{named}: at most {MAX_N_RFE} RFEM segments in a sweep, got {x} "
+                            "(the RK4 step of a beam falls as 1/segments^2; "
+                            "gpme_study.spec.MAX_N_RFE)")
 
     def is_integer(self, name):
         return isinstance(self.document.coerce(name, self.document.value(name)), int)
@@ -158,11 +164,10 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
         if getattr(run, key) is not None and f"run.{key}" in swept:
             problems.append(f"run.{key} is both swept (parameter run.{key}) and set in the "
                             "sweep's [run]; give it in one place")
-    columns = {}
-    if not problems:
-        columns = _base_columns(document, run, problems)
-    if not problems:
-        _value_problems(document, points, run, mode, problems)
+    columns = _base_columns(document, run, problems)
+    if columns:                   # the file itself builds: ask the loader about each value
+        _value_problems(document, _candidate_values(document, data, mode, parameters), run,
+                        problems)
     limits = _limits(data.get("limits") or {}, problems, columns) if columns else {}
     plot = data.get("plot") or {}
     plot_x, plot_y = _plot_axes(plot, swept, problems, space)
@@ -214,20 +219,42 @@ def _model_run_settings(run, problems) -> ModelRunSettings:
 MAX_CHECKED_VALUES = 2000
 
 
-def _value_problems(document, points, run, mode, problems):
+def _candidate_values(document, data, mode, parameters):
+    """The distinct (path, value) pairs the sweep sets, as written (a grid's axis values, a
+    list's values, a Latin hypercube's range ends), leaving out those already refused by
+    name or value (their problems are listed): what the loader is asked about."""
+    from .model_paths import PathError
+    space = ModelSpace(document)
+    pairs = []
+    if mode == "list":
+        points = data.get("points") if isinstance(data.get("points"), (list, tuple)) else []
+        pairs = [(name, value) for pt in points if isinstance(pt, dict)
+                 for name, value in pt.items()]
+    elif isinstance(parameters, dict):
+        for name, value in parameters.items():
+            values = _range(name, value, []) if mode == "lhs" else \
+                _grid_values(name, value, [])
+            pairs += [(name, v) for v in values or ()]
+    out = {}
+    for name, value in pairs:
+        try:
+            path = document.canonical(str(name))
+            x = _number(value)
+        except (PathError, ValueError, TypeError):
+            continue
+        ok = []
+        space.check(path, x, "", ok)
+        if not ok:
+            out[(path, document.coerce(path, x))] = None
+    return list(out)
+
+
+def _value_problems(document, values, run, problems):
     """Check every value a sweep sets with the model-file loader before any run: each
-    distinct (parameter, value) alone in the file (a grid's axis values, a list's values,
-    a Latin hypercube's range ends), with the sweep's run settings written in; and the
-    RK4 step against the output spacing (run.dt <= run.output_dt).  A value refused only
-    in combination with another one stays a point with status "invalid"."""
+    (path, value) of ``values`` alone in the file, with the sweep's run settings written
+    in; and the RK4 step against the output spacing (run.dt <= run.output_dt).  A value
+    refused only in combination with another one stays a point with status "invalid"."""
     from gpme_io.modelfile.load import parse_model_data
-    if mode == "lhs":
-        values = {}
-        for name in points[0] if points else ():
-            col = [pt[name] for pt in points]
-            values.update({(name, min(col)): None, (name, max(col)): None})
-    else:
-        values = {(name, v): None for pt in points for name, v in pt.items()}
     singles = [{}] + [{name: v} for name, v in list(values)[:MAX_CHECKED_VALUES]]
     of_the_file = set()         # problems of the file itself: listed once, not per value
     for single in singles:

@@ -190,11 +190,13 @@ def read_spec_file(path):
 
 
 def _number(value):
-    if isinstance(value, bool):
+    """float of a number or of a string holding one; ValueError naming the value else."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str, np.number)):
         raise ValueError(f"expected a number, got {value!r}")
-    if isinstance(value, str):
-        return float(value.strip())
-    return float(value)
+    try:
+        return float(value.strip() if isinstance(value, str) else value)
+    except ValueError:
+        raise ValueError(f"expected a number, got {value!r}") from None
 
 
 def _grid_values(name, value, problems):

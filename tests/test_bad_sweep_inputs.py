@@ -170,3 +170,16 @@ def test_the_command_itself_prints_one_error_and_no_traceback(case, tmp_path):
     for word in words:
         assert word in done.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_model_lhs_range_end_the_loader_refuses_is_named(tmp_path, capsys):
+    code = gpme_main(["sweep", "--model", str(ARM), "--mode", "lhs", "--samples", "3",
+                      "--param", "joint.shoulder.stiffness=-10:20", "--param",
+                      "flexible.forearm.segments=1:1000", "--in-process",
+                      "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert "parameters.joint.shoulder.stiffness = -10.0: joint[0].stiffness: must be >= 0" in err
+    assert "parameters.flexible.forearm.segments: at most 100 RFEM segments in a sweep, got " \
+           "1000" in err
+    assert not (tmp_path / "out").exists()
