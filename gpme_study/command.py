@@ -88,11 +88,18 @@ def _pairs(items, flag, problems):
 
 def spec_dict(args, problems):
     """The raw sweep dict of ``args``: the --config file's, overridden by the options;
-    problems with the options themselves are appended to ``problems``."""
+    problems with the options themselves are appended to ``problems``.  Returns None
+    (with the problem appended) when the --config file cannot be read."""
     from pathlib import Path
 
-    from .spec import read_spec_file
-    data = read_spec_file(args.config) if args.config else {}
+    from .spec import SweepSpecError, read_spec_file
+    try:
+        data = read_spec_file(args.config) if args.config else {}
+    except SweepSpecError as exc:
+        problems += exc.problems
+        data, args_only = {}, True
+    else:
+        args_only = False
     model = getattr(args, "model", None)
     if model:
         data["model"] = str(Path(model).resolve())
@@ -140,7 +147,7 @@ def spec_dict(args, problems):
     if getattr(args, "in_process", False) and (args.scheduler or args.workers is not None):
         problems.append("--in-process runs without Dask; it cannot be used with --scheduler "
                         "or --workers")
-    return data
+    return None if args_only else data
 
 
 def out_dir_problem(out):
@@ -204,11 +211,12 @@ def main(args):
     if out_problem:
         problems.append(out_problem)
     spec, data = None, None
-    try:
-        data = spec_dict(args, problems)
-        spec = spec_from_dict(data)
-    except SweepSpecError as exc:
-        problems += _name_flags(exc.problems, args)
+    data = spec_dict(args, problems)
+    if data is not None:          # the --config file was read: the whole description
+        try:
+            spec = spec_from_dict(data)
+        except SweepSpecError as exc:
+            problems += _name_flags(exc.problems, args)
     client = None
     if args.scheduler and not getattr(args, "in_process", False) and args.workers is None:
         from .runner import connect

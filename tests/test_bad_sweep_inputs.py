@@ -183,3 +183,15 @@ def test_model_lhs_range_end_the_loader_refuses_is_named(tmp_path, capsys):
     assert "parameters.flexible.forearm.segments: at most 100 RFEM segments in a sweep, got " \
            "1000" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_unreadable_config_does_not_hide_the_other_problems(tmp_path, capsys):
+    files = _files(tmp_path)
+    code = gpme_main(["sweep", "--config", files["bad_toml"], "--workers", "0",
+                      "--out", files["file"]])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert err.startswith("error: 3 problems in the sweep description:\n")
+    for word in ("exists and is not a directory", "bad.toml' cannot be parsed",
+                 "--workers must be >= 1, got 0"):
+        assert word in err, word
