@@ -225,11 +225,12 @@ def _floats(text, count, label, problems, default, infinite=False):
         v = None
     if v is None or v.shape != (count,) or \
             not np.all(~np.isnan(v) if infinite else np.isfinite(v)):
+        shown = repr(text) if len(text) <= 80 else f"{text[:80]!r}... ({len(text)} characters)"
         if count == 1:
             what = "number (inf allowed)" if infinite else "finite number"
-            problems.append(f"{label}: expected 1 {what}, got {text!r}")
+            problems.append(f"{label}: expected 1 {what}, got {shown}")
         else:
-            problems.append(f"{label}: expected {count} finite numbers, got {text!r} (write "
+            problems.append(f"{label}: expected {count} finite numbers, got {shown} (write "
                             f"{count} decimal numbers separated by spaces)")
         return np.array(default, dtype=float)
     return v
@@ -245,14 +246,13 @@ def _origin_transform(el, label, problems):
     return tf.homogeneous(tf.rpy_to_rotation(*rpy), xyz)
 
 
-def _read_inertial(link_el, problems, name):
+def _read_inertial(link_el, problems, link_label):
     """RigidBodyInertia of a <link> in the link frame, or None (no inertial, zero mass and
-    zero tensor, or invalid: the problem is appended, labelled with link ``name``)."""
+    zero tensor, or invalid: the problem is appended, starting with ``link_label``)."""
     el = link_el.find("inertial")
     if el is None:
         return None
-    label = f"link {name!r} <inertial>" if not name.startswith("#") else \
-        f"<link> {name} <inertial>"
+    label = f"{link_label} <inertial>"
     t = _origin_transform(el, label, problems)
     mass_el, inertia_el = el.find("mass"), el.find("inertia")
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -445,10 +445,10 @@ def _parse(robot, problems, notes) -> _Parsed:
     inertias, bad_inertia, geometry_only = {}, {}, []
     for k, (el, name) in enumerate(zip(link_els, link_names), start=1):
         if name is None:                  # reported; its <inertial> is still checked
-            _read_inertial(el, problems, f"#{k} (no name)")
+            _read_inertial(el, problems, f"<link> #{k} (no name)")
             continue
         bad = []
-        inertias[name] = _read_inertial(el, bad, name)
+        inertias[name] = _read_inertial(el, bad, f"link {name!r}")
         if bad:
             bad_inertia[name] = bad
         if el.find("visual") is not None or el.find("collision") is not None:
@@ -831,7 +831,7 @@ def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
                         "<robot name=...> with <link> and <joint> elements")
     side = None
     if side_file == "auto":
-        if data is not None and side_file_path(path).exists():
+        if side_file_path(path).exists():
             side, bad = read_side_file(side_file_path(path))
             problems += bad
     elif side_file is not None:

@@ -133,6 +133,8 @@ CASES = [
                                     'name="elbow" type="spherical"')), None,
      ["joint 'elbow': unknown type 'spherical'; URDF types: revolute, continuous, prismatic, "
       "fixed, floating, planar"]),
+    ("joint-type-missing", arm(('name="elbow" type="revolute"', 'name="elbow"')), None,
+     ["joint 'elbow': missing type=...; URDF types: revolute, continuous, prismatic"]),
     ("axis-zero", arm(('<axis xyz="0 1 0"/>', '<axis xyz="0 0 0"/>')), None,
      ["joint 'shoulder': <axis xyz> must not be zero, got '0 0 0'", "e.g. '0 0 1'"]),
     ("axis-not-finite", arm(('<axis xyz="0 1 0"/>', '<axis xyz="nan 1 0"/>')), None,
@@ -217,6 +219,11 @@ CASES = [
      side(flexible_links=[{"name": "forearm", "n_segments": -1}]),
      ["flexible link record 'forearm' (flexible_links #1): missing beam, joints, links",
       "n_segments must be an integer >= 0, got -1"]),
+    ("side-key-given-twice", ARM_TEXT,
+     '{"format": "gpme-urdf-side-file", "version": 1, "joints": {"shoulder": '
+     '{"stiffness": 1.0, "stiffness": -1.0}}}',
+     ["keys given twice in one object: ['stiffness'] (JSON keeps only the last; give each "
+      "once)"]),
     ("side-massless-link-unknown", ARM_TEXT, side(massless_links=["wrist"]),
      ["the side file's massless_links ['wrist'] are not links of the URDF"]),
 ]
@@ -331,10 +338,13 @@ def test_the_valid_side_file_loads_and_keeps_its_records(tmp_path):
     assert [d["joint"] for d in clean["drives"]] == ["elbow"] and len(problems) == 1
 
 
-def test_non_unit_axis_and_unnamed_robot_are_noted(tmp_path):
+def test_non_unit_axis_infinite_limit_and_unnamed_robot_are_accepted_and_noted(tmp_path):
     path = write_case(tmp_path, arm(('<axis xyz="0 1 0"/>', '<axis xyz="0 2 0"/>'),
-                                    ('<robot name="my_arm">', '<robot>')), None)
+                                    ('<robot name="my_arm">', '<robot>'),
+                                    ('lower="-2.6" upper="2.6"', 'lower="-inf" upper="inf"')),
+                      None)
     res = load_urdf(path)
+    assert res.model.joints[2].limits == (-np.inf, np.inf)
     assert np.allclose(res.model.joints[1].axis, (0.0, 1.0, 0.0), rtol=0, atol=1e-15)
     assert any("<axis xyz> not of unit length on 1 joint, normalised" in n and "shoulder" in n
                for n in res.notes)
