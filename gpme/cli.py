@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from gpme.budget import MAX_CSV_BYTES, MAX_WALL_S
+from gpme.out_lock import output_dir_problem
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (as verify's)
@@ -44,24 +45,6 @@ def _install_signal_handlers():
 def _error(msg):
     print(f"error: {msg}", file=sys.stderr)
     return EXIT_USAGE
-
-
-def output_dir_problem(path, flag="--out"):
-    """Why ``path`` cannot be the output directory (None when it can): made (if missing) and
-    written to before any work, so a long run never ends in an unwritable place."""
-    import tempfile
-    if not str(path).strip():
-        return f"{flag} is empty; give a directory (e.g. {flag} reports)"
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        return f"{flag} {str(p)!r} exists and is not a directory; give a directory"
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=p):
-            pass
-    except OSError as exc:
-        return f"{flag} {str(p)!r} cannot be created or written ({exc.strerror or exc})"
-    return None
 
 
 def load_scenarios(paths):

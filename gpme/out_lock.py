@@ -1,4 +1,5 @@
-"""One writer per output directory: an advisory lock (fcntl.flock on <dir>/.gpme.lock) held
+"""Output directories: whether a path can be one (checked before any work, creating nothing),
+and one writer per output directory: an advisory lock (fcntl.flock on <dir>/.gpme.lock) held
 while a command writes there, so two runs never interleave their files in one place.  The
 operating system releases it when the process ends, however it ends (no stale lock after a
 kill); the lock file names the holder for the message of the one refused.  Whoever takes
@@ -52,3 +53,30 @@ def _holder(path):
         return f"pid {info['pid']} on {info['host']}, started {info['started']}"
     except (OSError, ValueError, KeyError, TypeError):
         return "holder unknown"
+
+
+def output_dir_problem(path, flag="--out", example="reports"):
+    """Why ``path`` cannot be an output directory (None when it can), found before any work
+    and without creating anything: an empty name, an existing file, a file on the way, a
+    folder that cannot be written (a temporary file is tried in it or in the nearest
+    existing folder above it)."""
+    import tempfile
+    text = str(path)
+    if not text.strip():
+        return f"{flag} is empty; give a directory (e.g. {flag} {example})"
+    target = Path(text)
+    if target.exists() and not target.is_dir():
+        return f"{flag} {text!r} exists and is not a directory; give a directory"
+    probe = target
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{flag} {text!r} cannot be created: {str(probe)!r} on its way is a file"
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        where = "written" if probe == target else f"created in {str(probe)!r}"
+        return f"{flag} {text!r} cannot be {where} ({exc.strerror or exc}); give a " \
+               "directory you can write"
+    return None

@@ -67,17 +67,18 @@ class RunCost:
         history 10,001 rows x 45 columns: 11 MB CSV, 11 MB in memory'."""
         if self.wall_s is None:
             time_text = (f"wall time not known before the run ({self.method} chooses its "
-                         f"steps; one evaluation costs {_seconds(self.seconds_per_eval)})")
+                         f"steps; one evaluation costs {format_seconds(self.seconds_per_eval)})")
         else:
             bound = "" if self.exact else "at least "
-            time_text = (f"{bound}{_seconds(self.wall_s)} wall ({self.method}: "
+            time_text = (f"{bound}{format_seconds(self.wall_s)} wall ({self.method}: "
                          f"{bound}{self.steps:,} steps x {STAGES[self.method]} evaluations "
-                         f"of {_seconds(self.seconds_per_eval)})")
+                         f"of {format_seconds(self.seconds_per_eval)})")
         return (f"{time_text}; history {self.rows:,} rows x {self.columns} columns: "
-                f"{_bytes(self.csv_bytes)} CSV, {_bytes(self.memory_bytes)} in memory")
+                f"{format_bytes(self.csv_bytes)} CSV, {format_bytes(self.memory_bytes)} in memory")
 
 
-def _seconds(s):
+def format_seconds(s):
+    """'126 us', '3 s', '2.1 min', '8.6 h', '3.2 days', '1.2e+05 years'."""
     if s < 1e-3:
         return f"{s * 1e6:.0f} us"
     if s < 1.0:
@@ -93,7 +94,8 @@ def _seconds(s):
     return f"{s / (365.25 * 86400):.3g} years"
 
 
-def _bytes(b):
+def format_bytes(b):
+    """'54.8 kB', '6.63 MB', '2.1 GB'."""
     for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if b >= size:
             return f"{b / size:.3g} {unit}"

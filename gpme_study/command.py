@@ -152,34 +152,17 @@ def spec_dict(args, problems):
 
 def out_dir_problem(out):
     """Why ``out`` cannot be the sweep's output directory (None when it can), found
-    without creating anything: an empty name, an existing file, a file on the way, a
-    folder that cannot be written (a temporary file is tried in it or in the nearest
-    existing folder above it)."""
-    import tempfile
+    without creating anything (gpme.out_lock.output_dir_problem, and its points/ and plots/
+    must be directories if present)."""
     from pathlib import Path
-    text = str(out)
-    if not text.strip():
-        return "--out is empty; give the output directory, e.g. reports/sweep"
-    path = Path(text)
-    if path.exists() and not path.is_dir():
-        return (f"--out {text!r} exists and is not a directory; give a directory (a new one, "
-                "or a sweep's earlier --out to resume it)")
+
+    from gpme.out_lock import output_dir_problem
+    problem = output_dir_problem(out, example="reports/sweep")
+    if problem:
+        return problem
     for sub in ("points", "plots"):
-        if (path / sub).exists() and not (path / sub).is_dir():
-            return f"--out {text!r}: {str(path / sub)!r} exists and is not a directory"
-    probe = path
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if not probe.is_dir():
-        return (f"--out {text!r} cannot be created: {str(probe)!r} on its way is a file, "
-                "not a directory")
-    try:
-        with tempfile.TemporaryFile(dir=probe):
-            pass
-    except OSError as exc:
-        what = "written" if probe == path else f"created in {str(probe)!r}"
-        return (f"--out {text!r} cannot be {what} ({exc.strerror or exc}); give a "
-                "directory you can write")
+        if (Path(out) / sub).exists() and not (Path(out) / sub).is_dir():
+            return f"--out {str(out)!r}: {str(Path(out) / sub)!r} exists and is not a directory"
     return None
 
 
@@ -236,14 +219,10 @@ def main(args):
 
 
 def _run(args, spec, data, client):
-    import json
     from pathlib import Path
 
-    from gpme_core.atomic import atomic_write_text
-
     from .cost import estimate
-    from .plots import write_plots
-    from .runner import pending_points, run_sweep
+    from .runner import pending_points
     out = Path(args.out)
     in_process = getattr(args, "in_process", False)
     report = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
@@ -264,6 +243,22 @@ def _run(args, spec, data, client):
         return 2
     for line in over:
         report(f"--force given, running although {line}")
+    from gpme.out_lock import OutputBusyError, exclusive_output
+    try:
+        with exclusive_output(out):       # one sweep writing to one --out at a time
+            return _sweep_and_report(args, spec, data, client, out, report, in_process)
+    except OutputBusyError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _sweep_and_report(args, spec, data, client, out, report, in_process):
+    import json
+
+    from gpme_core.atomic import atomic_write_text
+
+    from .plots import write_plots
+    from .runner import run_sweep
     atomic_write_text(out / "sweep_spec.json", json.dumps(data, indent=1, default=str))
     table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
                       retry_errors=args.retry_errors, report=report, in_process=in_process,

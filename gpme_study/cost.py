@@ -35,6 +35,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from gpme_core.errors import GpmeError
+from gpme_core.run_cost import format_bytes, format_seconds, kernels_compiled
 
 log = logging.getLogger("gpme.sweep")
 # what stops a point at its start (its run records the same as its status): gpme's errors
@@ -106,10 +107,7 @@ class Sampler:
         its cache load), once, and say so."""
         if self.first_call_s is not None:
             return
-        from gpme_core import fast
-        compiling = fast.ENABLED and not all(
-            getattr(getattr(fast, name, None), "signatures", [None])
-            for name in ("chain_and_terms", "reduced_solve", "point"))
+        compiling = not kernels_compiled()
         if compiling:
             self.report("compiling the numba kernels (first call in this process; numba "
                         "keeps them in its on-disk cache) ...")
@@ -271,13 +269,13 @@ class CostEstimate:
         if not self.points:
             return "estimate: nothing to compute"
         lo, mean, hi = self.point_s
-        spread = f"{_seconds(mean)} per point" + (
-            f" ({_seconds(lo)} - {_seconds(hi)} over {self.sampled} sampled)"
+        spread = f"{format_seconds(mean)} per point" + (
+            f" ({format_seconds(lo)} - {format_seconds(hi)} over {self.sampled} sampled)"
             if self.sampled > 1 and hi > 1.05 * lo else "")
         return (f"estimate: {self.points} points x {spread} on {self.workers} worker"
-                f"{'s' if self.workers != 1 else ''}: about {_seconds(self.wall_s)} wall; "
-                f"output {_bytes(self.output_bytes)}, largest run history "
-                f"{_bytes(self.history_bytes)} in memory (estimated in "
+                f"{'s' if self.workers != 1 else ''}: about {format_seconds(self.wall_s)} wall; "
+                f"output {format_bytes(self.output_bytes)}, largest run history "
+                f"{format_bytes(self.history_bytes)} in memory (estimated in "
                 f"{self.measure_s:.1f} s)")
 
     def problems(self):
@@ -288,18 +286,18 @@ class CostEstimate:
         if self.wall_s > MAX_WALL_S:
             lo, mean, hi = self.point_s
             out.append(
-                f"the sweep is estimated at {_seconds(self.wall_s)} wall time ({self.points} "
-                f"points x {_seconds(mean)} each on {self.workers} worker(s); the longest "
+                f"the sweep is estimated at {format_seconds(self.wall_s)} wall time ({self.points} "
+                f"points x {format_seconds(mean)} each on {self.workers} worker(s); the longest "
                 f"sampled run has {self.steps:.3g} RK4 steps), above the limit of "
-                f"{_seconds(MAX_WALL_S)} (gpme_study.cost.MAX_WALL_S); "
+                f"{format_seconds(MAX_WALL_S)} (gpme_study.cost.MAX_WALL_S); "
                 + reduce.format(more=", more --workers"))
         if self.output_bytes > MAX_OUTPUT_BYTES:
-            out.append(f"the sweep would write about {_bytes(self.output_bytes)}, above the "
-                       f"limit of {_bytes(MAX_OUTPUT_BYTES)} (gpme_study.cost."
+            out.append(f"the sweep would write about {format_bytes(self.output_bytes)}, above the "
+                       f"limit of {format_bytes(MAX_OUTPUT_BYTES)} (gpme_study.cost."
                        "MAX_OUTPUT_BYTES); " + reduce.format(more=""))
         if self.history_bytes > MAX_HISTORY_BYTES:
-            out.append(f"one run would hold a history of about {_bytes(self.history_bytes)} "
-                       f"in memory, above the limit of {_bytes(MAX_HISTORY_BYTES)} per "
+            out.append(f"one run would hold a history of about {format_bytes(self.history_bytes)} "
+                       f"in memory, above the limit of {format_bytes(MAX_HISTORY_BYTES)} per "
                        "worker (gpme_study.cost.MAX_HISTORY_BYTES); reduce it (a smaller "
                        "--t-end or a larger --output-dt) or pass --force to run it anyway")
         return out
@@ -347,26 +345,3 @@ def _figures(spec):
         from .model_metrics import heat_map_metrics
         maps = len(heat_map_metrics(spec.metric_table, spec.limits))
     return maps + (1 if spec.limits else 0)
-
-
-def _seconds(s):
-    if s < 1e-3:
-        return f"{s * 1e6:.0f} us"
-    if s < 1.0:
-        return f"{s * 1e3:.0f} ms"
-    if s < 120:
-        return f"{s:.1f} s"
-    if s < 7200:
-        return f"{s / 60:.1f} min"
-    if s < 2 * 86400:
-        return f"{s / 3600:.1f} h"
-    if s < 2 * 365.25 * 86400:
-        return f"{s / 86400:.1f} days"
-    return f"{s / (365.25 * 86400):.3g} years"
-
-
-def _bytes(b):
-    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if b >= size:
-            return f"{b / size:.3g} {unit}"
-    return f"{b:.0f} B"

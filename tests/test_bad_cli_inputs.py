@@ -118,7 +118,7 @@ def test_out_empty(command, capsys):
 def test_simulate_out_unwritable(capsys):
     code, err = _run(["simulate", "--case", "rigid", "--t-end", "0.01", "--out",
                       "/proc/gpme_cannot_be_here", "--no-progress"], capsys)
-    assert code == 2 and "cannot be created or written" in err
+    assert code == 2 and "--out '/proc/gpme_cannot_be_here' cannot be created in '/proc'" in err
 
 
 def test_simulate_out_being_written_by_another_run(tmp_path, capsys):

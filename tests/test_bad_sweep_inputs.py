@@ -36,7 +36,7 @@ def _files(tmp):
 CASES = {
     "out-is-a-file": (OK, "{file}", ["--out", "a_file'", "exists and is not a directory"]),
     "out-under-a-file": (OK, "{file}/sub", ["cannot be created", "on its way is a file"]),
-    "out-empty": (OK, "", ["--out is empty", "give the output directory"]),
+    "out-empty": (OK, "", ["--out is empty", "give a directory (e.g. --out reports/sweep)"]),
     "config-missing": (["--config", "{missing}"], None, ["sweep file", "missing.toml",
                                                           "does not exist"]),
     "config-bad-toml": (["--config", "{bad_toml}"], None, ["bad.toml", "cannot be parsed",
@@ -195,3 +195,16 @@ def test_unreadable_config_does_not_hide_the_other_problems(tmp_path, capsys):
     for word in ("exists and is not a directory", "bad.toml' cannot be parsed",
                  "--workers must be >= 1, got 0"):
         assert word in err, word
+
+
+def test_sweep_refused_while_another_writes_the_same_out(tmp_path, capsys):
+    """Two sweeps on one --out would interleave their point files: the second is refused,
+    naming the first (gpme.out_lock)."""
+    from gpme.cli import main
+    from gpme.out_lock import exclusive_output
+    out = tmp_path / "sweep"
+    with exclusive_output(out):
+        code = main(["sweep", *OK, "--out", str(out), "--in-process", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "is being written by another gpme run (pid" in err
+    assert "Traceback" not in err and not list(out.glob("points/*"))
