@@ -312,3 +312,28 @@ def test_wall_time_limit_stops_a_run(crane, method):
                                               r"is 1e-09 s\) at t = .* of t_end = 1 s "
                                               rf"\({method}\).*--force"):
         simulate(system, 1.0, q0, q_dot0, method=method, max_wall_s=1e-9)
+
+
+def test_flexible_section_and_urdf_problems_in_one_message(tmp_path):
+    """A [[flexible]] section that cannot be (a wall thicker than the tube's radius) and a
+    broken URDF inertial: both listed at once."""
+    from gpme_core.errors import ModelFileError
+    from gpme_io.modelfile import load_model_file
+    arm = ROOT / "examples" / "my_arm"
+    (tmp_path / "my_arm.urdf").write_text((arm / "my_arm.urdf").read_text().replace(
+        '<mass value="1.5"/>', '<mass value="abc"/>', 1))
+    text = (arm / "my_arm.toml").read_text().replace("[initial]", """[[flexible]]
+link = "forearm"
+section = { shape = "tube", outer_diameter = 0.02, wall_thickness = 0.05 }
+youngs_modulus = 70.0e9
+shear_modulus = 26.0e9
+density = 2700.0
+segments = 2
+
+[initial]""")
+    (tmp_path / "my_arm.toml").write_text(text)
+    with pytest.raises(ModelFileError) as exc:
+        load_model_file(tmp_path / "my_arm.toml")
+    message = str(exc.value)
+    assert "flexible[0].section" in message and "wall_thickness" in message
+    assert "<mass value>" in message and "'abc'" in message

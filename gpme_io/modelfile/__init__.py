@@ -58,11 +58,20 @@ def _build(spec: ModelFile, problems: list) -> Scenario:
     source = None
     source_ok = spec.model is not None and not any(
         p.split(":", 1)[0].split(".", 1)[0].split("[", 1)[0] in _SOURCE_KEYS for p in problems)
+    blocking = {p.split(":", 1)[0].split(".", 1)[0].split("[", 1)[0] for p in problems} & set(
+        _SOURCE_KEYS)
     if source_ok:
         try:
             source = build_source(spec)
         except ModelFileError as exc:
             problems += exc.problems
+    elif spec.model is not None and blocking == {"flexible"}:
+        # only a [[flexible]] entry is wrong: still read the URDF (with the valid entries) so
+        # that its problems are listed now, not after the entry is fixed
+        try:
+            build_source(spec)
+        except ModelFileError as exc:
+            problems += [p for p in exc.problems if p not in problems]
     if source is not None:
         problems += reference_problems(spec, source.model)
     if problems or source is None:

@@ -96,8 +96,8 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
                 axis=f.axis, length=f.length, section_y_axis=f.section_y_axis)
         except ModelError as exc:
             problems += [f"{f.key}.section: {p}" for p in exc.problems]
-    if problems:
-        raise ModelFileError(problems)
+    # the URDF is read even when a [[flexible]] section is wrong (with the valid ones), so
+    # that its problems are listed with the section's, not after it is fixed
     chain = spec.chain
     ends = None if chain is None or (chain.root is None and chain.tip is None) \
         else (chain.root, chain.tip)
@@ -107,7 +107,10 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
                         flexible=flexible, gravity=tuple(spec.model.gravity),
                         name=spec.model.name)
     except ModelError as exc:
-        raise ModelFileError([f"model.urdf ({src.written}): {p}" for p in exc.problems]) from None
+        raise ModelFileError(problems + [f"model.urdf ({src.written}): {p}"
+                                         for p in exc.problems]) from None
+    if problems:
+        raise ModelFileError(problems)
     notes = list(res.notes)
     if src.side_file is None and side_file_path(src.path).is_file():
         notes.append(f"side file {side_file_path(src.path).name} beside the URDF read (springs, "
