@@ -273,11 +273,30 @@ def build_parser():
     return parser
 
 
-def main(argv=None):
+def _ignore_late_signals():
+    """The command's work is done and written: a SIGTERM or SIGINT during the interpreter's
+    shutdown would only turn exit 0 into a death by signal."""
+    import signal
+    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            signal.signal(sig, signal.SIG_IGN)
+
+
+def console_main():
+    """Entry point of the `gpme` script and `python -m gpme.cli`: main, then exit with its
+    status, late signals ignored."""
+    sys.exit(main(ignore_late_signals=True))
+
+
+def main(argv=None, ignore_late_signals=False):
     args = build_parser().parse_args(argv)
     _install_signal_handlers()
     try:
-        return args.func(args)
+        code = args.func(args)
+        if ignore_late_signals:
+            _ignore_late_signals()
+        return code
     except Terminated as exc:
         import signal
         print(f"terminated ({signal.Signals(exc.signum).name}); finished files kept, "
@@ -293,4 +312,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    console_main()

@@ -37,10 +37,26 @@ def run(kernel, *args):
     try:
         return kernel(*args)
     except SystemError as exc:
-        for cause in (exc.__cause__, exc.__context__):
-            if isinstance(cause, KeyboardInterrupt):
-                raise cause from None
+        interrupt = _interrupt_in_chain(exc)
+        if interrupt is not None:
+            raise interrupt from None
         raise
+
+
+def _interrupt_in_chain(exc, depth=32):
+    """The KeyboardInterrupt behind ``exc`` (through __cause__ / __context__, several
+    SystemErrors deep when numba was unpickling a kernel), or None."""
+    seen = set()
+    todo = [exc]
+    while todo and len(seen) < depth:
+        e = todo.pop()
+        if e is None or id(e) in seen:
+            continue
+        seen.add(id(e))
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        todo += [e.__cause__, e.__context__]
+    return None
 
 
 @_jit

@@ -123,6 +123,16 @@ def test_interrupt_inside_a_compiled_kernel_is_given_back():
         fast.run(kernel_interrupted_by(KeyboardInterrupt()))
     with pytest.raises(Terminated):
         fast.run(kernel_interrupted_by(Terminated(signal.SIGTERM)))
+    def unpickling_interrupted(*args):          # three SystemErrors deep, as numba does
+        try:
+            kernel_interrupted_by(KeyboardInterrupt())()
+        except SystemError as first:
+            try:
+                raise SystemError("returned a result with an exception set") from first
+            except SystemError as second:
+                raise SystemError("returned a result with an exception set") from second
+    with pytest.raises(KeyboardInterrupt):
+        fast.run(unpickling_interrupted)
     with pytest.raises(SystemError):            # any other SystemError stays what it is
         fast.run(kernel_interrupted_by(ValueError("x")))
     assert fast.run(lambda a, b: a + b, 2, 3) == 5
