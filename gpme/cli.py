@@ -129,8 +129,8 @@ def _simulate(args):
     from gpme_core.errors import GpmeError
     if output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
-    if args.dt is not None and not args.dt > 0:
-        return _error(f"--dt must be a positive step in s, got {args.dt!r}")
+    if args.dt is not None and not 0 < args.dt < float("inf"):
+        return _error(f"--dt must be a positive, finite step in s, got {args.dt!r}")
     if args.t_end is not None and not (args.t_end > 0 and args.t_end < float("inf")):
         return _error(f"--t-end must be a positive duration in s, got {args.t_end!r}")
     if args.dt is not None and args.t_end is not None and args.dt > args.t_end:
