@@ -28,7 +28,7 @@ def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_ma
     system = crane_system(n, params)
     q0, qd0 = initial_state(system.model, params, static_arm=static_arm and n > 0)
     if dt is None and method == "RK4" and n <= DEFAULT_N_RFE:
-        dt = DEFAULT_DT[case]
+        dt = min(DEFAULT_DT[case], t_end) if t_end > 0 else DEFAULT_DT[case]
     df = simulate(system, t_end, q0, qd0, dt=dt, method=method, on_manifold=on_manifold,
                   progress=progress, output_dt=output_dt, before_run=before_run,
                   estimate_only=estimate_only, max_wall_s=max_wall_s)
