@@ -20,7 +20,15 @@ Mapping (docs/mjcf.md has the full table):
 
 Coordinates: MuJoCo's qpos of the chain joints equals gpme's q (same order), and
 qvel equals q_dot; the auxiliary joints (crosscheck.mujoco.mechanism.AUX_JOINTS) follow.
+
+The document is built as an xml.etree.ElementTree tree, so every name and value is escaped
+(``&``, ``<``, ``>``, quotes, tab, newline, carriage return) and the output is well-formed
+XML; names MuJoCo would refuse, or that XML cannot hold, are refused first with one
+ModelError listing each (:func:`name_problems`).
 """
+import re
+import xml.etree.ElementTree as ET
+
 import numpy as np
 
 from gpme_core.errors import ModelError
@@ -65,11 +73,11 @@ def _quat(rotation):
 
 
 def _pose_attributes(transform):
-    """' pos=".." quat=".."' of a (4, 4) transform (quat left out when it is the identity)."""
+    """{"pos": .., "quat": ..} of a (4, 4) transform (quat left out when it is the identity)."""
     t = np.asarray(transform, dtype=float)
-    out = f' pos="{_vec(t[:3, 3])}"'
+    out = {"pos": _vec(t[:3, 3])}
     if not np.array_equal(t[:3, :3], np.eye(3)):
-        out += f' quat="{_vec(_quat(t[:3, :3]))}"'
+        out["quat"] = _vec(_quat(t[:3, :3]))
     return out
 
 
@@ -134,124 +142,232 @@ def bounded_inertia(link):
     return link.inertia.mass, link.inertia.com_array, i, note
 
 
-def _chain_xml(model, indent):
-    """Nested <body> elements of the chain, and the number of closing tags to emit."""
-    groups = body_groups(model)
+WORLD_BODY = "world"       # MuJoCo's own name of its world body
+DRIVE_PREFIX = "drive_"    # the motor of the drive on joint j is "drive_<j>" (crosscheck.mujoco.sim)
+KEYFRAME = "start"
+# names the auxiliary mechanism gives its MuJoCo objects (its joints: mech.AUX_JOINTS)
+AUX_BODIES = ("aux_crank", "aux_follower", "aux_yoke", "aux_puck")
+AUX_SITES = ("aux_crank_pin", "aux_focus_1", "aux_focus_2", "aux_yoke_slot", "aux_puck")
+AUX_TENDON = "aux_ellipse_string"
+AUX_YOKE_EQUALITY = "aux_scotch_yoke"
+
+# Anything outside XML 1.0's Char production (tab, newline, carriage return, U+0020-U+D7FF,
+# U+E000-U+FFFD, U+10000-U+10FFFF) cannot be written at all, not even as a character
+# reference: the C0 controls, lone surrogates, U+FFFE and U+FFFF.
+_NOT_XML_CHAR = re.compile("[^\t\n\r\u0020-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+_VALID_NAME = ("a non-empty str of printable characters (tab, newline and carriage return "
+               "allowed; XML escapes &, <, >, quotes)")
+
+
+def _text_problem(label, value, empty_ok=False):
+    """The problem of ``value`` as an XML attribute naming ``label`` (None when writable)."""
+    if not isinstance(value, str):
+        return f"{label} {value!r}: must be {_VALID_NAME}, got a {type(value).__name__}"
+    if not value and not empty_ok:
+        return f"{label} is empty: MuJoCo refers to it by name; must be {_VALID_NAME}"
+    bad = sorted(set(_NOT_XML_CHAR.findall(value)))
+    if bad:
+        codes = ", ".join(f"U+{ord(c):04X}" for c in bad)
+        return (f"{label} {value!r}: character {codes} cannot be written in XML 1.0; "
+                f"must be {_VALID_NAME}")
+    return None
+
+
+def name_problems(model, programme=None):
+    """Problems (list of str, empty when none) of the names ``model`` (and the auxiliary
+    mechanism of ``programme``, an EllipticProgramme or None) would give MuJoCo objects:
+    not a str, empty, holding a character XML cannot hold, or repeated within one of
+    MuJoCo's namespaces (bodies, joints, sites, tendons, equalities, actuators), MuJoCo's
+    world body and the mechanism's ``aux_`` names included.  These are the only names
+    MuJoCo refuses (measured: every other non-empty name of XML characters, whitespace,
+    markup characters and any Unicode plane included, loads and comes back unchanged;
+    tests/test_mjcf.py)."""
+    problems = []
+    p = _text_problem("model name", model.name, empty_ok=True)
+    if p:
+        problems.append(p)
+    # namespace -> [(name, who gives it: an owner whose own name it is, else a description)]
+    spaces = {"body": [(WORLD_BODY, "MuJoCo's world body")], "joint": [], "site": [],
+              "tendon": [], "equality": [], "actuator": []}
+    owned = []   # (namespace, name, owner kind) of the names the user gives
+    for group in body_groups(model):
+        owned.append(("body", model.links[group[-1]].name, "link"))
+    for j in model.joints:
+        owned.append(("joint", j.name, "joint"))
+    for name in model.frames:
+        owned.append(("site", name, "frame"))
+    if programme is not None:
+        for name in programme.names:
+            owned.append(("equality", name, "constraint"))
+    for space, name, kind in owned:
+        p = _text_problem(f"{kind} name", name)
+        if p:
+            problems.append(p)
+        else:
+            spaces[space].append((name, f"{kind} {name!r}"))
+    # crosscheck.mujoco.sim reads these joints as the mechanism's even when it is absent
+    spaces["joint"] += [(n, "the auxiliary mechanism (a reserved joint name)") for n in mech.AUX_JOINTS]
+    for d in model.drives:
+        if _text_problem("", d.joint) is None:
+            spaces["actuator"].append((DRIVE_PREFIX + d.joint, f"the drive on joint {d.joint!r}"))
+    if programme is not None:
+        mechanism = "the auxiliary mechanism"
+        spaces["body"] += [(n, mechanism) for n in AUX_BODIES]
+        spaces["site"] += [(n, mechanism) for n in AUX_SITES]
+        spaces["tendon"].append((AUX_TENDON, mechanism))
+        spaces["equality"].append((AUX_YOKE_EQUALITY, mechanism))
+    for space, entries in spaces.items():
+        givers = {}
+        for name, who in entries:
+            givers.setdefault(name, []).append(who)
+        for name, who in givers.items():
+            if len(who) > 1:
+                problems.append(f"MuJoCo {space} name {name!r} is given to {' and to '.join(who)}: "
+                                f"MuJoCo refuses a repeated {space} name; rename "
+                                f"{'all but one' if len(who) > 2 else 'one of them'}"
+                                + (" (one drive per joint: sum the functions)"
+                                   if space == "actuator" else ""))
+    return problems
+
+
+def _comment(text):
+    """An XML comment holding ``text``: a comment has no escapes, so "--" (which would end
+    it) is written "- -" and characters XML cannot hold as their Python escapes."""
+    text = _NOT_XML_CHAR.sub(lambda m: repr(m.group())[1:-1], str(text))
+    return ET.Comment(" " + re.sub("-(?=-)", "- ", text) + " ")
+
+
+def _chain(worldbody, model):
+    """Nested <body> elements of the chain (see the module docstring) under ``worldbody``."""
     frames_by_link = {}
     for name, fr in model.frames.items():
         frames_by_link.setdefault(fr.link_index, []).append((name, fr))
-    lines = []
-    pad = indent
-    for group in groups:
+    parent = worldbody
+    for group in body_groups(model):
         last = group[-1]
         link = model.links[last]
-        lines.append(f'{pad}<body name="{link.name}"{_pose_attributes(model.joints[group[0]].origin)}>')
-        inner = pad + "  "
+        body = ET.SubElement(parent, "body", name=link.name,
+                             **_pose_attributes(model.joints[group[0]].origin))
         for k in group:
             j = model.joints[k]
-            kind = "hinge" if j.kind == REVOLUTE else "slide"
-            rng = ""
+            attributes = {"name": j.name, "type": "hinge" if j.kind == REVOLUTE else "slide",
+                          "axis": _vec(j.axis), "stiffness": _f(j.stiffness),
+                          "springref": _f(j.spring_reference), "damping": _f(j.damping)}
             if np.all(np.isfinite(j.limits)):
                 # documented, not enforced: gpme stops a run outside it, MuJoCo would
                 # add a unilateral limit constraint instead
-                rng = f' range="{_vec(j.limits)}" limited="false"'
-            lines.append(f'{inner}<joint name="{j.name}" type="{kind}" axis="{_vec(j.axis)}" '
-                         f'stiffness="{_f(j.stiffness)}" springref="{_f(j.spring_reference)}" '
-                         f'damping="{_f(j.damping)}"{rng}/>')
+                attributes.update(range=_vec(j.limits), limited="false")
+            ET.SubElement(body, "joint", attributes)
         mass, c, i, note = bounded_inertia(link)
-        full = (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
         if note:
-            lines.append(f"{inner}<!-- {note} -->")
-        lines.append(f'{inner}<inertial pos="{_vec(c)}" mass="{_f(mass)}" '
-                     f'fullinertia="{_vec(full)}"/>')
-        lines.append(f'{inner}<geom type="sphere" size="{_f(VIEW_SPHERE_RADIUS)}" pos="{_vec(c)}" '
-                     'contype="0" conaffinity="0" group="1" rgba="0.3 0.5 0.8 1"/>')
+            body.append(_comment(note))
+        ET.SubElement(body, "inertial", pos=_vec(c), mass=_f(mass),
+                      fullinertia=_vec((i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])))
+        ET.SubElement(body, "geom", type="sphere", size=_f(VIEW_SPHERE_RADIUS), pos=_vec(c),
+                      contype="0", conaffinity="0", group="1", rgba="0.3 0.5 0.8 1")
         for name, fr in sorted(frames_by_link.get(last, [])):
-            lines.append(f'{inner}<site name="{name}"{_pose_attributes(fr.transform)} '
-                         'size="0.02" rgba="1 0.2 0.2 1"/>')
-        pad = inner
-    closing = [f'{indent}{"  " * d}</body>' for d in reversed(range(len(groups)))]
-    return lines + closing
+            ET.SubElement(body, "site", name=name, **_pose_attributes(fr.transform),
+                          size="0.02", rgba="1 0.2 0.2 1")
+        parent = body
 
 
-def _light_inertial(settings, pad):
-    m, i = _f(settings.aux_mass), _f(settings.aux_inertia)
-    return f'{pad}<inertial pos="0 0 0" mass="{m}" diaginertia="{i} {i} {i}"/>'
+def _light_inertial(body, settings):
+    i = settings.aux_inertia
+    ET.SubElement(body, "inertial", pos="0 0 0", mass=_f(settings.aux_mass),
+                  diaginertia=_vec((i, i, i)))
 
 
-def mechanism_xml(model, programme, settings, indent="    "):
-    """(worldbody lines, tendon lines, equality lines) of the auxiliary mechanism."""
+def _mechanism(root, worldbody, model, programme, settings):
+    """The auxiliary mechanism: its bodies under ``worldbody``, its <tendon> and
+    <equality> sections under ``root`` (crosscheck.mujoco.mechanism, docs/mjcf.md)."""
     h = programme.height
     xc, yc = programme.center
     z0, amp = h.offset, h.amplitude
     s = settings
-    p = indent
-    q = p + "  "
-    r = q + "  "
     foci = programme.foci_local()
-    imp = _f(s.impedance)
-    solimp = f'solimp="{imp} {imp} 0.001 0.5 2"'
-    solref = f'solref="{_f(s.timeconst)} {_f(s.dampratio)}"'
-    solref_yoke = f'solref="{_f(s.yoke_timeconst or s.timeconst)} {_f(s.dampratio)}"'
-    mf = _f(s.follower_mass)
-    world = [
-        f"{p}<!-- auxiliary mechanism (crosscheck/mujoco/mechanism.py): enforces "
-        f"{programme.names[0]} and {programme.names[1]} -->",
-        f'{p}<body name="aux_crank" pos="{_vec((xc + s.crank_offset, yc, z0))}" gravcomp="1">',
-        f'{q}<joint name="{mech.CRANK}" type="hinge" axis="0 1 0" armature="{_f(s.crank_armature)}"/>',
-        _light_inertial(s, q),
-        f'{q}<site name="aux_crank_pin" pos="0 0 {_f(amp)}" size="0.02"/>',
-        f"{p}</body>",
-        f'{p}<body name="aux_follower" pos="{_vec((xc, yc, z0))}" gravcomp="1">',
-        f'{q}<joint name="{mech.FOLLOWER}" type="slide" axis="0 0 1"/>',
-        f'{q}<inertial pos="0 0 0" mass="{mf}" diaginertia="{mf} {mf} {mf}"/>',
-        f'{q}<site name="aux_focus_1" pos="{_vec(foci[0])}" size="0.02"/>',
-        f'{q}<site name="aux_focus_2" pos="{_vec(foci[1])}" size="0.02"/>',
-        f'{q}<body name="aux_yoke" pos="{_f(s.crank_offset)} 0 0" gravcomp="1">',
-        f'{r}<joint name="{mech.YOKE}" type="slide" axis="1 0 0"/>',
-        _light_inertial(s, r),
-        f'{r}<site name="aux_yoke_slot" size="0.02"/>',
-        f"{q}</body>",
-        f'{q}<body name="aux_puck" gravcomp="1">',
-        f'{r}<joint name="{mech.PUCK_X}" type="slide" axis="1 0 0"/>',
-        f'{r}<joint name="{mech.PUCK_Y}" type="slide" axis="0 1 0"/>',
-        _light_inertial(s, r),
-        f'{r}<site name="aux_puck" size="0.02"/>',
-        f"{q}</body>",
-        f"{p}</body>",
-    ]
-    tendon = [f'{p}<spatial name="aux_ellipse_string" width="0.003">',
-              f'{q}<site site="aux_focus_1"/>', f'{q}<site site="{programme.frame}"/>',
-              f'{q}<site site="aux_focus_2"/>', f"{p}</spatial>"]
+    impedance = _f(s.impedance)
+    soft = {"solref": _vec((s.timeconst, s.dampratio)),
+            "solimp": " ".join((impedance, impedance, "0.001", "0.5", "2"))}
+    soft_yoke = dict(soft, solref=_vec((s.yoke_timeconst or s.timeconst, s.dampratio)))
+    worldbody.append(_comment("auxiliary mechanism (crosscheck/mujoco/mechanism.py): enforces "
+                              f"{programme.names[0]} and {programme.names[1]}"))
+    crank = ET.SubElement(worldbody, "body", name="aux_crank",
+                          pos=_vec((xc + s.crank_offset, yc, z0)), gravcomp="1")
+    ET.SubElement(crank, "joint", name=mech.CRANK, type="hinge", axis="0 1 0",
+                  armature=_f(s.crank_armature))
+    _light_inertial(crank, s)
+    ET.SubElement(crank, "site", name="aux_crank_pin", pos=_vec((0.0, 0.0, amp)), size="0.02")
+    follower = ET.SubElement(worldbody, "body", name="aux_follower", pos=_vec((xc, yc, z0)),
+                             gravcomp="1")
+    ET.SubElement(follower, "joint", name=mech.FOLLOWER, type="slide", axis="0 0 1")
+    mf = s.follower_mass
+    ET.SubElement(follower, "inertial", pos="0 0 0", mass=_f(mf), diaginertia=_vec((mf, mf, mf)))
+    ET.SubElement(follower, "site", name="aux_focus_1", pos=_vec(foci[0]), size="0.02")
+    ET.SubElement(follower, "site", name="aux_focus_2", pos=_vec(foci[1]), size="0.02")
+    yoke = ET.SubElement(follower, "body", name="aux_yoke", pos=_vec((s.crank_offset, 0.0, 0.0)),
+                         gravcomp="1")
+    ET.SubElement(yoke, "joint", name=mech.YOKE, type="slide", axis="1 0 0")
+    _light_inertial(yoke, s)
+    ET.SubElement(yoke, "site", name="aux_yoke_slot", size="0.02")
+    puck = ET.SubElement(follower, "body", name="aux_puck", gravcomp="1")
+    ET.SubElement(puck, "joint", name=mech.PUCK_X, type="slide", axis="1 0 0")
+    ET.SubElement(puck, "joint", name=mech.PUCK_Y, type="slide", axis="0 1 0")
+    _light_inertial(puck, s)
+    ET.SubElement(puck, "site", name="aux_puck", size="0.02")
+
+    string = ET.SubElement(ET.SubElement(root, "tendon"), "spatial", name=AUX_TENDON,
+                           width="0.003")
+    for site in ("aux_focus_1", programme.frame, "aux_focus_2"):
+        ET.SubElement(string, "site", site=site)
     # tendon_length0 is the length at qpos0 (all q = 0, follower at z0); MuJoCo's tendon
     # equality holds length - tendon_length0 = polycoef[0]
     p_e0, _ = mech.frame_motion(model, programme.frame, np.zeros(model.n_coordinates),
                                 np.zeros(model.n_coordinates))
     offset = programme.string_length - mech.string_length_at(programme, p_e0, z0)
-    equality = [
-        f'{p}<connect name="aux_scotch_yoke" site1="aux_crank_pin" site2="aux_yoke_slot" '
-        f"{solref_yoke} {solimp}/>",
-        f'{p}<connect name="{programme.names[1]}" site1="{programme.frame}" site2="aux_puck" '
-        f"{solref} {solimp}/>",
-        f'{p}<tendon name="{programme.names[0]}" tendon1="aux_ellipse_string" '
-        f'polycoef="{_f(offset)} 0 0 0 0" {solref} {solimp}/>',
-    ]
-    return world, tendon, equality
+    equality = ET.SubElement(root, "equality")
+    ET.SubElement(equality, "connect", name=AUX_YOKE_EQUALITY, site1="aux_crank_pin",
+                  site2="aux_yoke_slot", **soft_yoke)
+    ET.SubElement(equality, "connect", name=programme.names[1], site1=programme.frame,
+                  site2="aux_puck", **soft)
+    ET.SubElement(equality, "tendon", name=programme.names[0], tendon1=AUX_TENDON,
+                  polycoef=_vec((offset, 0.0, 0.0, 0.0, 0.0)), **soft)
 
 
-def mjcf_text(model, dt=1e-4, constraints=None, settings=None, initial_state=None,
-              initial_time=0.0):
-    """The MJCF document (str) of ``model``.
+def _state_problems(model, initial_state, initial_time):
+    """Problems of the keyframe's (q, q_dot) and time (empty when valid)."""
+    n = model.n_coordinates
+    if initial_time is None or not np.isfinite(float(initial_time)):
+        return [f"initial_time must be a finite time (s), got {initial_time!r}"]
+    try:
+        q, q_dot = initial_state
+    except (TypeError, ValueError):
+        return [f"initial_state must be a pair (q, q_dot) of ({n},) arrays, got {initial_state!r}"]
+    problems = []
+    for label, v in (("q", q), ("q_dot", q_dot)):
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            problems.append(f"initial_state {label} must be ({n},) numbers, got {v!r}")
+            continue
+        if a.shape != (n,):
+            problems.append(f"initial_state {label} must have shape ({n},) (one per coordinate "
+                            f"{list(model.coordinate_names)}), got shape {a.shape}")
+        elif not np.all(np.isfinite(a)):
+            bad = [c for c, x in zip(model.coordinate_names, a) if not np.isfinite(x)]
+            problems.append(f"initial_state {label} must be finite, got {a[~np.isfinite(a)].tolist()} "
+                            f"for {bad}")
+    for d in model.drives:
+        ctrl = d.function(initial_time)
+        if not np.isfinite(ctrl):
+            problems.append(f"drive on {d.joint!r}: its value at initial_time {initial_time!r} s "
+                            f"(the keyframe's ctrl) must be finite, got {ctrl!r}")
+    return problems
 
-    model         : gpme_core.model.Model
-    dt            : s, MuJoCo timestep (RK4)
-    constraints   : None, or the gpme constraint specs to realise with the auxiliary
-                    mechanism (see crosscheck.mujoco.mechanism.read_programme)
-    settings      : MechanismSettings (default when None)
-    initial_state : optional (q (n,), q_dot (n,)) written as keyframe "start" at
-                    initial_time (s); with constraints the auxiliary coordinates are
-                    completed to match (it should then lie on the constraints)
-    """
+
+def mjcf_element(model, dt=1e-4, constraints=None, settings=None, initial_state=None,
+                 initial_time=0.0):
+    """The MJCF document of ``model`` as an ElementTree element <mujoco> (arguments as
+    :func:`mjcf_text`); ModelError listing every problem (dt, mechanism, names, keyframe)."""
     problems = []
     if not (np.isfinite(dt) and dt > 0):
         problems.append(f"dt must be positive (s), got {dt!r}")
@@ -263,57 +379,68 @@ def mjcf_text(model, dt=1e-4, constraints=None, settings=None, initial_state=Non
             programme = mech.read_programme(model, constraints)
         except ModelError as exc:
             problems += exc.problems
-    try:
-        chain = _chain_xml(model, "    ")
-    except ModelError as exc:
-        problems += exc.problems
+    problems += name_problems(model, programme)
+    if initial_state is not None:
+        problems += _state_problems(model, initial_state, initial_time)
     if problems:
         raise ModelError(problems)
-    flags = ['contact="disable"']
+    root = ET.Element("mujoco", model=model.name)
+    ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
+    option = ET.SubElement(root, "option", timestep=_f(dt), integrator="RK4",
+                           gravity=_vec(model.gravity), solver="Newton", iterations="50",
+                           tolerance="1e-14")
+    flags = {"contact": "disable"}
     if programme is not None:
-        flags += ['diagexact="enable"', 'refsafe="disable"']
-    lines = [f"<!-- {model.name}: {GENERATOR_NOTE} -->",
-             f'<mujoco model="{model.name}">',
-             '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
-             f'  <option timestep="{_f(dt)}" integrator="RK4" gravity="{_vec(model.gravity)}" '
-             'solver="Newton" iterations="50" tolerance="1e-14">',
-             f'    <flag {" ".join(flags)}/>',
-             "  </option>",
-             "  <worldbody>"]
-    lines += chain
-    tendon = equality = []
+        flags.update(diagexact="enable", refsafe="disable")
+    ET.SubElement(option, "flag", flags)
+    worldbody = ET.SubElement(root, "worldbody")
+    _chain(worldbody, model)
     if programme is not None:
-        world, tendon, equality = mechanism_xml(model, programme, settings)
-        lines += world
-    lines.append("  </worldbody>")
-    if tendon:
-        lines += ["  <tendon>", *tendon, "  </tendon>"]
-    if equality:
-        lines += ["  <equality>", *equality, "  </equality>"]
+        _mechanism(root, worldbody, model, programme, settings)
     if model.drives:
-        lines.append("  <actuator>")
+        actuator = ET.SubElement(root, "actuator")
         for d in model.drives:
-            lines.append(f'    <!-- ctrl = {d.function!r} (N or N m), set by the caller -->')
-            lines.append(f'    <motor name="drive_{d.joint}" joint="{d.joint}" gear="1"/>')
-        lines.append("  </actuator>")
+            actuator.append(_comment(f"ctrl = {d.function!r} (N or N m), set by the caller"))
+            ET.SubElement(actuator, "motor", name=DRIVE_PREFIX + d.joint, joint=d.joint, gear="1")
     if initial_state is not None:
-        lines += _keyframe(model, programme, initial_state, initial_time)
-    lines.append("</mujoco>")
-    return "\n".join(lines) + "\n"
+        _keyframe(root, model, programme, initial_state, initial_time)
+    return root
 
 
-def _keyframe(model, programme, initial_state, t0):
+def mjcf_text(model, dt=1e-4, constraints=None, settings=None, initial_state=None,
+              initial_time=0.0):
+    """The MJCF document (str, well-formed XML) of ``model``.
+
+    model         : gpme_core.model.Model
+    dt            : s, MuJoCo timestep (RK4)
+    constraints   : None, or the gpme constraint specs to realise with the auxiliary
+                    mechanism (see crosscheck.mujoco.mechanism.read_programme)
+    settings      : MechanismSettings (default when None)
+    initial_state : optional (q (n,), q_dot (n,)) written as keyframe "start" at
+                    initial_time (s); with constraints the auxiliary coordinates are
+                    completed to match (it should then lie on the constraints)
+
+    ModelError listing every problem, names MuJoCo would refuse included
+    (:func:`name_problems`).
+    """
+    root = mjcf_element(model, dt, constraints, settings, initial_state, initial_time)
+    ET.indent(root, space="  ")
+    header = ET.tostring(_comment(f"{model.name}: {GENERATOR_NOTE}"), encoding="unicode")
+    return header + "\n" + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _keyframe(root, model, programme, initial_state, t0):
     q, q_dot = (np.asarray(v, dtype=float) for v in initial_state)
     qpos, qvel = q, q_dot
     if programme is not None:
         p_e, v_e = mech.frame_motion(model, programme.frame, q, q_dot)
         aux_q, aux_v = mech.auxiliary_state(programme, p_e, v_e, t0)
         qpos, qvel = np.concatenate([q, aux_q]), np.concatenate([q_dot, aux_v])
+    key = ET.SubElement(ET.SubElement(root, "keyframe"), "key", name=KEYFRAME, time=_f(t0),
+                        qpos=_vec(qpos), qvel=_vec(qvel))
     ctrl = [d.function(t0) for d in model.drives]
-    ctrl_attr = f' ctrl="{_vec(ctrl)}"' if ctrl else ""
-    return ["  <keyframe>",
-            f'    <key name="start" time="{_f(t0)}" qpos="{_vec(qpos)}" qvel="{_vec(qvel)}"{ctrl_attr}/>',
-            "  </keyframe>"]
+    if ctrl:
+        key.set("ctrl", _vec(ctrl))
 
 
 def write_mjcf(model, path, dt=1e-4, constraints=None, settings=None, initial_state=None,
