@@ -28,11 +28,13 @@ ModelError listing each (:func:`name_problems`).
 """
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
 from gpme_core.errors import ModelError
-from gpme_core.model import REVOLUTE
+from gpme_core.model import REVOLUTE, Model
 
 from . import mechanism as mech
 from ..reports.tables import atomic_write_text
@@ -162,7 +164,7 @@ _VALID_NAME = ("a non-empty str of printable characters (tab, newline and carria
 def _text_problem(label, value, empty_ok=False):
     """The problem of ``value`` as an XML attribute naming ``label`` (None when writable)."""
     if not isinstance(value, str):
-        return f"{label} {value!r}: must be {_VALID_NAME}, got a {type(value).__name__}"
+        return f"{label} {value!r}: must be {_VALID_NAME}, got type {type(value).__name__}"
     if not value and not empty_ok:
         return f"{label} is empty: MuJoCo refers to it by name; must be {_VALID_NAME}"
     bad = sorted(set(_NOT_XML_CHAR.findall(value)))
@@ -173,15 +175,16 @@ def _text_problem(label, value, empty_ok=False):
     return None
 
 
-def name_problems(model, programme=None):
+def name_problems(model: Model, programme: mech.EllipticProgramme | None = None) -> list[str]:
     """Problems (list of str, empty when none) of the names ``model`` (and the auxiliary
     mechanism of ``programme``, an EllipticProgramme or None) would give MuJoCo objects:
     not a str, empty, holding a character XML cannot hold, or repeated within one of
     MuJoCo's namespaces (bodies, joints, sites, tendons, equalities, actuators), MuJoCo's
-    world body and the mechanism's ``aux_`` names included.  These are the only names
-    MuJoCo refuses (measured: every other non-empty name of XML characters, whitespace,
-    markup characters and any Unicode plane included, loads and comes back unchanged;
-    tests/test_mjcf.py)."""
+    world body and the mechanism's ``aux_`` names included; and a joint named as one of
+    the mechanism's (mech.AUX_JOINTS), which crosscheck.mujoco.sim would take for it.
+    Repeats are the only names MuJoCo itself refuses (measured with MuJoCo 4.0.0: every
+    other non-empty name of XML characters, whitespace, markup and any Unicode plane
+    included, loads and comes back unchanged; tests/test_mjcf.py)."""
     problems = []
     p = _text_problem("model name", model.name, empty_ok=True)
     if p:
@@ -205,28 +208,31 @@ def name_problems(model, programme=None):
             problems.append(p)
         else:
             spaces[space].append((name, f"{kind} {name!r}"))
-    # crosscheck.mujoco.sim reads these joints as the mechanism's even when it is absent
-    spaces["joint"] += [(n, "the auxiliary mechanism (a reserved joint name)") for n in mech.AUX_JOINTS]
     for d in model.drives:
-        if _text_problem("", d.joint) is None:
+        if isinstance(d.joint, str):   # validate_model: a coordinate name, checked above
             spaces["actuator"].append((DRIVE_PREFIX + d.joint, f"the drive on joint {d.joint!r}"))
     if programme is not None:
         mechanism = "the auxiliary mechanism"
         spaces["body"] += [(n, mechanism) for n in AUX_BODIES]
+        spaces["joint"] += [(n, mechanism) for n in mech.AUX_JOINTS]
         spaces["site"] += [(n, mechanism) for n in AUX_SITES]
         spaces["tendon"].append((AUX_TENDON, mechanism))
         spaces["equality"].append((AUX_YOKE_EQUALITY, mechanism))
+    else:
+        # crosscheck.mujoco.sim reads a joint of such a name as the mechanism's
+        problems += [f"joint name {j.name!r} is reserved for the auxiliary mechanism's joints "
+                     f"{list(mech.AUX_JOINTS)} (crosscheck.mujoco.sim would read it as one); "
+                     "rename the joint" for j in model.joints if j.name in mech.AUX_JOINTS]
     for space, entries in spaces.items():
         givers = {}
         for name, who in entries:
             givers.setdefault(name, []).append(who)
         for name, who in givers.items():
             if len(who) > 1:
+                fix = ("give each joint one drive (sum the functions)" if space == "actuator"
+                       else f"rename {'all but one' if len(who) > 2 else 'one of them'}")
                 problems.append(f"MuJoCo {space} name {name!r} is given to {' and to '.join(who)}: "
-                                f"MuJoCo refuses a repeated {space} name; rename "
-                                f"{'all but one' if len(who) > 2 else 'one of them'}"
-                                + (" (one drive per joint: sum the functions)"
-                                   if space == "actuator" else ""))
+                                f"MuJoCo refuses a repeated {space} name; {fix}")
     return problems
 
 
@@ -364,8 +370,9 @@ def _state_problems(model, initial_state, initial_time):
     return problems
 
 
-def mjcf_element(model, dt=1e-4, constraints=None, settings=None, initial_state=None,
-                 initial_time=0.0):
+def mjcf_element(model: Model, dt: float = 1e-4, constraints: Sequence | None = None,
+                 settings: mech.MechanismSettings | None = None,
+                 initial_state: tuple | None = None, initial_time: float = 0.0) -> ET.Element:
     """The MJCF document of ``model`` as an ElementTree element <mujoco> (arguments as
     :func:`mjcf_text`); ModelError listing every problem (dt, mechanism, names, keyframe)."""
     problems = []
@@ -407,8 +414,9 @@ def mjcf_element(model, dt=1e-4, constraints=None, settings=None, initial_state=
     return root
 
 
-def mjcf_text(model, dt=1e-4, constraints=None, settings=None, initial_state=None,
-              initial_time=0.0):
+def mjcf_text(model: Model, dt: float = 1e-4, constraints: Sequence | None = None,
+              settings: mech.MechanismSettings | None = None, initial_state: tuple | None = None,
+              initial_time: float = 0.0) -> str:
     """The MJCF document (str, well-formed XML) of ``model``.
 
     model         : gpme_core.model.Model
@@ -443,8 +451,10 @@ def _keyframe(root, model, programme, initial_state, t0):
         key.set("ctrl", _vec(ctrl))
 
 
-def write_mjcf(model, path, dt=1e-4, constraints=None, settings=None, initial_state=None,
-               initial_time=0.0):
+def write_mjcf(model: Model, path: str | Path, dt: float = 1e-4,
+               constraints: Sequence | None = None,
+               settings: mech.MechanismSettings | None = None,
+               initial_state: tuple | None = None, initial_time: float = 0.0) -> str:
     """Write :func:`mjcf_text` to ``path`` atomically; returns the text."""
     text = mjcf_text(model, dt, constraints, settings, initial_state, initial_time)
     atomic_write_text(path, text)
