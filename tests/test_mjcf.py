@@ -49,6 +49,24 @@ def test_drift_check_reports_an_edited_file(tmp_path):
     assert gen.main(["--check", "--out", str(tmp_path)]) == 1
 
 
+def test_drift_check_reports_a_file_that_is_not_utf8(tmp_path, capsys):
+    gen.generate_mjcf(tmp_path)
+    path = tmp_path / "crane_rigid.xml"
+    path.write_bytes(path.read_bytes().replace(b"crane_rigid", b"crane_\xff", 1))
+    assert gen.drift(tmp_path) == [f"{path}: differs from the generator from line 1"]
+    assert gen.main(["--check", "--out", str(tmp_path)]) == 1
+    assert "crane_rigid.xml: differs" in capsys.readouterr().out
+
+
+def test_generate_into_an_unusable_directory_is_one_error_line(tmp_path, capsys):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    assert gen.main(["--out", str(a_file / "sub")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: cannot write the MJCF files to {a_file / 'sub'}: ")
+    assert "Traceback" not in err and err.count("\n") == 1
+
+
 def test_quaternion_of_rotations(rng):
     # includes rotations by ~pi, where Shepperd's method must switch branches
     for angle in (0.0, 0.3, np.pi - 1e-9, np.pi):

@@ -3,7 +3,8 @@
     python -m crosscheck.mujoco.generate_mjcf            # (re)write every file
     python -m crosscheck.mujoco.generate_mjcf --check    # exit 1 when a committed file drifted
 
-Files (each loads with mujoco.MjModel.from_xml_path; tests/test_mjcf.py checks that):
+Files (each written by crosscheck.mujoco.mjcf through ElementTree, compared byte for byte by
+--check, and loaded with mujoco.MjModel.from_xml_path by tests/test_mjcf.py):
 
 * crane_rigid.xml, crane_flexible_n{1,2,3}.xml: the crane alone, keyframe "start" = the
   paper's off-manifold initial state (at rest).
@@ -67,8 +68,8 @@ def drift(out_dir=DEFAULT_DIR):
         path = out_dir / name
         if not path.exists():
             problems.append(f"{path}: missing")
-        elif path.read_text(encoding="utf-8") != text:
-            old = path.read_text(encoding="utf-8").splitlines()
+        elif path.read_bytes() != text.encode("utf-8"):
+            old = path.read_bytes().decode("utf-8", errors="replace").splitlines()
             new = text.splitlines()
             first = next((k for k, (a, b) in enumerate(zip(old, new)) if a != b), min(len(old), len(new)))
             problems.append(f"{path}: differs from the generator from line {first + 1}")
@@ -90,7 +91,12 @@ def main(argv=None):
             return 1
         print(f"{len(mjcf_documents())} MJCF files in {args.out} match the generator")
         return 0
-    docs = generate_mjcf(args.out)
+    try:
+        docs = generate_mjcf(args.out)
+    except OSError as exc:
+        print(f"error: cannot write the MJCF files to {args.out}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 2
     print(f"wrote {len(docs)} MJCF files to {args.out}")
     return 0
 
