@@ -10,6 +10,13 @@ interrupted) and renamed into place only when complete, under a name no other ru
 taken (two runs started in the same second get <run-id> and <run-id>-2), and `latest` is
 replaced atomically, so an interrupted run leaves the previous report whole and `latest`
 unchanged.  Exit status 1 when any check fails (or a step crashes), 0 otherwise.
+
+Each run is compared with the previous one (the report `latest` pointed at when the run
+started, or ``--compare-to DIR``): checks whose error/tolerance grew more than 10x, status
+changes, new and vanished checks, changed versions (crosscheck.reports.run_diff); the diff
+is in summary.json ("diff"), at the top of index.html and printed at the end.  For CI,
+``--junit-xml PATH`` and ``--summary-md PATH`` write the JUnit XML and a markdown job
+summary of the run (crosscheck.reports.junit, crosscheck.reports.summary_md; docs/ci.md).
 """
 import json
 import os
@@ -25,6 +32,7 @@ import pandas as pd
 
 from gpme.out_lock import exclusive_output
 
+from .reports import run_diff
 from .reports.index_page import write_index
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
@@ -41,6 +49,7 @@ OWNER_FILE = ".owner.json"
 # s: a staging directory without a readable owner (or from another host) older than this is
 # taken as dead
 STALE_AFTER_S = 2 * 86400.0
+CRASH_QUANTITY = "step crashed"    # the quantity of a crashed step's one row
 
 
 def _say(msg):
@@ -114,7 +123,7 @@ def _report_crash(staging, step, exc):
 
 def _crash_row(step, exc):
     return pd.DataFrame([{
-        "engine": step, "model": "-", "quantity": "step crashed",
+        "engine": step, "model": "-", "quantity": CRASH_QUANTITY,
         "case": "-", "entry": type(exc).__name__, "gpme_value": float("nan"),
         "engine_value": float("nan"), "abs_error": float("inf"), "rel_error": float("nan"),
         "scale": float("nan"), "tol_abs": 0.0, "tol_rel": 0.0, "passed": False,
@@ -221,26 +230,45 @@ def _models_record(scenarios):
     return out
 
 
+def previous_report(root, compare_to=None):
+    """(summary.json document or None, where it was looked for, one-line note or None): the
+    report to diff this run against, read before the run starts: ``compare_to`` (a report
+    directory or its summary.json) or the run root/latest points at."""
+    if compare_to is not None:
+        data, note = run_diff.load_previous(compare_to)
+        return data, str(compare_to), note
+    latest = Path(root) / "latest"
+    if not (latest.is_symlink() or latest.exists()):
+        return None, str(latest), (f"no previous run in {root} ({latest} does not exist): "
+                                   "nothing to compare with")
+    data, note = run_diff.load_previous(latest)
+    target = os.readlink(latest) if latest.is_symlink() else latest.name
+    return data, str(Path(root) / target), note
+
+
 def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None,
-               keep=None, max_wall_s=None):
+               keep=None, max_wall_s=None, compare_to=None):
     """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
 
     scenarios: gpme_io.scenario.Scenario list (``--model`` files); None runs the paper's
     crane (its two runs with the paper's figures, and the default crane cases per engine).
     keep     : after publishing, keep only this many newest runs in root (None: all).
     max_wall_s: s, each gpme run stopped after this long (None: no limit).
+    compare_to: report directory (or its summary.json) to diff against; None: the run
+    root/latest points at when this run starts.
     Staging directories of dead runs in root are removed first.
     """
     root = Path(root)
     only = STEP_ALIASES.get(only, only)
     run_id = run_id or time.strftime("%Y%m%d-%H%M%S") + ("-quick" if quick else "")
     root.mkdir(parents=True, exist_ok=True)
+    previous = previous_report(root, compare_to)
     for name in remove_dead_partials(root):
         _say(f"removed {root / name}: the partial directory of a run that died")
     staging = _claim_run_dir(root, run_id)
     try:
         result = _run_steps(root, staging, run_id, quick, only, progress, scenarios,
-                            max_wall_s)
+                            max_wall_s, previous)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
@@ -249,7 +277,8 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     return result
 
 
-def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None):
+def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None,
+               previous=(None, "", None)):
     from .run_checks import run_warnings
     start = time.perf_counter()
     tables, runs, timings = {}, None, {}
@@ -290,30 +319,49 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     summary = summarise(rows, keys=("engine", "section", "model", "quantity"))
     summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
                                 for r in summary.itertuples()])
+    keys = ["engine", "section", "model", "quantity"]
+    summary = summary.merge(run_diff.check_ratios(rows, keys=keys), on=keys, how="left",
+                            validate="one_to_one")
     warnings = run_warnings(rows.to_dict("records")) if "reason" in rows.columns else []
     for warning in warnings:
         _say(f"WARNING {warning}")
     meta = environment(quick=quick, only=only, run_id=run_id,
                        wall_time_s=time.perf_counter() - start, step_times_s=timings)
     write_csv(summary, staging / "summary.csv")
-    atomic_write_text(staging / "summary.json", json.dumps({
+    document = {
         "run": meta,
         "passed": not bool(_failed(summary).any()),
         "models": record,
         "warnings": warnings,
-        "checks": [{"name": r["check"], "engine": r["engine"], "model": r["model"],
-                    "quantity": r["quantity"], "n_compared": int(r["n_compared"]),
-                    "worst_abs_error": _num(r["worst_abs_error"]),
-                    "worst_rel_error": _num(r["worst_rel_error"]),
-                    "tol_abs": _num(r["tol_abs"]), "tol_rel": _num(r["tol_rel"]),
-                    "status": _status(r), "reason": r["reason"]}
-                   for r in summary.to_dict("records")]}, indent=1))
-    write_index(staging, summary, rows, runs, meta, record)
+        "checks": [_check_record(r) for r in summary.to_dict("records")]}
+    previous_doc, source, note = previous
+    document["diff"] = run_diff.diff_summaries(previous_doc, document, source=source, note=note)
+    atomic_write_text(staging / "summary.json", json.dumps(document, indent=1))
+    write_index(staging, summary, rows, runs, meta, record, diff=document["diff"])
     (staging / OWNER_FILE).unlink()
     with exclusive_output(root):            # one publisher at a time: name and `latest`
         final, run_id = _publish(root, staging, run_id)
         _point_latest(root, run_id)
     return final, summary, rows
+
+
+def _check_record(r):
+    """summary.json's entry of one check (a summary row as a dict)."""
+    return {"name": r["check"], "engine": r["engine"], "section": r["section"],
+            "model": r["model"], "quantity": r["quantity"], "n_compared": int(r["n_compared"]),
+            "n_fail": int(r["n_fail"]),
+            "worst_abs_error": _num(r["worst_abs_error"]),
+            "worst_rel_error": _num(r["worst_rel_error"]),
+            "worst_case": _text(r["worst_case"]), "worst_entry": _text(r["worst_entry"]),
+            "tol_abs": _num(r["tol_abs"]), "tol_rel": _num(r["tol_rel"]),
+            "tolerance": _num(r["tolerance"]),
+            "error_over_tolerance": _num(r["error_over_tolerance"]),
+            "status": _status(r), "reason": r["reason"],
+            "crashed": r["quantity"] == CRASH_QUANTITY and r["model"] == "-"}
+
+
+def _text(v):
+    return None if v is None or (isinstance(v, float) and v != v) else str(v)
 
 
 def _failed(df):
@@ -364,17 +412,104 @@ def estimate_runs(scenarios, quick, force):
                                                            estimate_only=True))
 
 
+def output_file_problem(path, flag, example):
+    """Why ``path`` cannot be written as the output file of ``flag`` (None when it can),
+    found before any work and without creating anything."""
+    import tempfile
+    text = str(path)
+    if not text.strip():
+        return f"{flag} is empty; give a file name (e.g. {flag} {example})"
+    target = Path(text)
+    if target.is_dir():
+        return (f"{flag} {text!r} is a directory; give a file name (e.g. {flag} "
+                f"{Path(text) / example})")
+    probe = target.parent
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{flag} {text!r} cannot be created: {str(probe)!r} on its way is a file"
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        return (f"{flag} {text!r} cannot be written in {str(probe)!r} ({exc.strerror or exc}); "
+                "give a path in a folder you can write")
+    return None
+
+
+def compare_to_problem(path):
+    """Why ``--compare-to path`` names no report (None when it does; a report whose
+    summary.json turns out unreadable is said in one line of the diff, not refused)."""
+    text = str(path)
+    valid = ("give a gpme verify report directory (e.g. reports/<run-id>, holding "
+             "summary.json) or its summary.json")
+    if not text.strip():
+        return f"--compare-to is empty; {valid}"
+    target = Path(text)
+    if not target.exists():
+        return f"--compare-to {text!r} does not exist; {valid}"
+    if target.is_dir() and not (target / run_diff.SUMMARY_FILE).is_file():
+        return f"--compare-to {text!r} holds no {run_diff.SUMMARY_FILE}; {valid}"
+    return None
+
+
+def flag_problems(args):
+    """Every problem of verify's report flags (--junit-xml, --summary-md, --compare-to)."""
+    problems = []
+    outputs = {flag: getattr(args, attr, None) for flag, attr in
+               (("--junit-xml", "junit_xml"), ("--summary-md", "summary_md"))}
+    for (flag, value), example in zip(outputs.items(), ("gpme-junit.xml", "gpme-summary.md")):
+        if value is not None:
+            problem = output_file_problem(value, flag, example)
+            if problem:
+                problems.append(problem)
+    values = [v for v in outputs.values() if v is not None and str(v).strip()]
+    if len(values) == 2 and Path(values[0]).resolve() == Path(values[1]).resolve():
+        problems.append(f"--junit-xml and --summary-md both name {values[0]!r}; give each "
+                        "its own file")
+    if getattr(args, "compare_to", None) is not None:
+        problem = compare_to_problem(args.compare_to)
+        if problem:
+            problems.append(problem)
+    return problems
+
+
+def _print_problems(problems):
+    if len(problems) == 1:
+        print(f"error: {problems[0]}", file=sys.stderr)
+    else:
+        print(f"error: {len(problems)} problems on the command line:\n" +
+              "\n".join(f"  - {p}" for p in problems), file=sys.stderr)
+
+
+def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
+    """Write the JUnit XML and the markdown summary of the run in ``run_dir`` (``document``:
+    its summary.json); returns the paths written."""
+    from .reports.junit import write_junit_xml
+    from .reports.summary_md import write_summary_md
+    written = []
+    if junit_xml is not None:
+        written.append(write_junit_xml(junit_xml, document, report_dir=str(run_dir)))
+    if summary_md is not None:
+        written.append(write_summary_md(summary_md, document,
+                                        index_path=str(Path(run_dir) / "index.html")))
+    return written
+
+
 def main(args):
     from gpme.budget import wall_limit
     from gpme_core.errors import GpmeError
     scenarios = None
+    problems = flag_problems(args)
     if getattr(args, "model", None):
         from gpme.cli import load_scenarios
         try:
             scenarios = load_scenarios(args.model)
         except GpmeError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
+            problems.append(str(exc))
+    if problems:
+        _print_problems(problems)
+        return 2
     try:
         estimate_runs(scenarios, args.quick, getattr(args, "force", False))
     except GpmeError as exc:
@@ -383,7 +518,8 @@ def main(args):
     run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
                                      progress=not args.no_progress, scenarios=scenarios,
                                      keep=getattr(args, "keep", None),
-                                     max_wall_s=wall_limit(getattr(args, "force", False)))
+                                     max_wall_s=wall_limit(getattr(args, "force", False)),
+                                     compare_to=getattr(args, "compare_to", None))
     cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
             "worst_rel_error", "status"]
     status = summary.apply(_status, axis=1)
@@ -391,6 +527,11 @@ def main(args):
         print(summary.assign(status=status)[cols].to_string(index=False))
     n_fail = int(_failed(summary).sum())
     n_pass, n_info = int((status == "pass").sum()), int((status == "info").sum())
+    document = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
+    for path in write_ci_outputs(run_dir, document, getattr(args, "junit_xml", None),
+                                 getattr(args, "summary_md", None)):
+        print(f"wrote {path}")
+    print("\n".join(run_diff.diff_lines(document["diff"])))
     print(f"{len(summary)} checks: {n_pass} passed, {n_fail} failed, {n_info} information "
           f"only (not gated); report: {run_dir / 'index.html'}")
     return 1 if n_fail else 0

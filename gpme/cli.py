@@ -263,6 +263,16 @@ def build_parser():
     ver.add_argument("--force", action="store_true",
                      help=f"run even when a gpme run is estimated above "
                           f"{MAX_WALL_S / 3600:g} h or {MAX_CSV_BYTES / 1e9:g} GB of history")
+    ver.add_argument("--junit-xml", default=None, metavar="PATH",
+                     help="also write the checks as JUnit XML (one testcase per check; "
+                          "failures, information checks as skipped, crashed steps as "
+                          "errors) for CI test reports (docs/ci.md)")
+    ver.add_argument("--summary-md", default=None, metavar="PATH",
+                     help="also write a short markdown summary (verdict, counts, failed "
+                          "checks, changes since the previous run) for a CI job summary")
+    ver.add_argument("--compare-to", default=None, metavar="DIR",
+                     help="report directory (or its summary.json) to list changes against "
+                          "(default: the run --out/latest points at before this run)")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
     from gpme_study.command import add_arguments as add_sweep_arguments

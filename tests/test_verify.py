@@ -3,6 +3,9 @@ headless browser (Debian's chromium + chromedriver through selenium)."""
 import json
 import os
 import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pandas as pd
@@ -62,7 +65,7 @@ def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
     root = report[0]
     rows = report[3]
     # the directory logic is under test, not the runs: a step that returns the first run's rows
-    monkeypatch.setattr(verify, "_paper_step", lambda run_dir, quick, progress: (rows, None))
+    monkeypatch.setattr(verify, "_paper_step", lambda *args, **kwargs: (rows, None))
     first, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     second, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     assert first != second and first.name == "same" and second.name == "same-2"
@@ -70,7 +73,7 @@ def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
     assert (root / "latest").resolve() == second.resolve()
 
 
-def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys):
+def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys, tmp_path):
     root = report[0]
 
     def broken_step(name, run_dir, scenarios, quick, progress):
@@ -79,8 +82,154 @@ def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys):
 
     class Args:
         out, quick, only, no_progress, model = str(root), True, "pinocchio", True, []
+        junit_xml, summary_md = str(tmp_path / "r.xml"), str(tmp_path / "r.md")
     assert verify.main(Args) == 1
-    assert "1 failed" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "1 failed" in out
+    # the crashed step: an <error> in the JUnit XML, the verdict first in the markdown
+    error = ET.parse(tmp_path / "r.xml").getroot().find("testsuite/testcase/error")
+    assert error.get("type") == "RuntimeError"
+    assert error.get("message") == "pinocchio engine unavailable"
+    md = (tmp_path / "r.md").read_text()
+    assert md.startswith("## gpme verify ❌ FAILED: 1 of 1 checks failed")
+    assert "| `pinocchio/terms/-/step crashed` |" in md and "step crashed |" in md
+    # the previous run (`latest`) ran the paper step only: its checks vanished, not failed
+    data = json.loads((root / "latest" / "summary.json").read_text())
+    assert data["diff"]["mode_changed"] == ["--only: gpme before, pinocchio now"]
+    assert data["diff"]["new"] == ["pinocchio/terms/-/step crashed"]
+    assert "not like for like: --only" in out
+
+
+def test_first_run_says_there_is_nothing_to_compare(report):
+    _, run_dir, _, _ = report
+    diff = json.loads((run_dir / "summary.json").read_text())["diff"]
+    assert diff["previous"] is None and "no previous run in" in diff["note"]
+    assert "Since the previous run" in (run_dir / "index.html").read_text()
+
+
+def test_unreadable_previous_report_is_one_line_not_a_crash(report, monkeypatch, tmp_path):
+    rows = report[3]
+    monkeypatch.setattr(verify, "_paper_step", lambda *args, **kwargs: (rows, None))
+    bad = tmp_path / "old-run"
+    bad.mkdir()
+    (bad / "summary.json").write_text('{"run": {"run_id": "old"}, "checks": [')
+    root = tmp_path / "reports"
+    run_dir, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False,
+                                      compare_to=bad)
+    diff = json.loads((run_dir / "summary.json").read_text())["diff"]
+    assert diff["previous"] is None and "is not valid JSON" in diff["note"]
+    # `latest` pointing at a report that was removed since
+    shutil.rmtree(run_dir)
+    run_dir, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False)
+    diff = json.loads((run_dir / "summary.json").read_text())["diff"]
+    assert diff["previous"] is None and "has no summary.json" in diff["note"]
+
+
+# ---- the CI outputs and the diff of two real runs (the CLI as a user runs it) ----------
+
+MY_ARM = REPO / "examples" / "my_arm" / "my_arm.toml"
+JUNIT_SCHEMA = REPO / "tests" / "data" / "junit" / "junit-10.xsd"
+
+
+def _cli_verify(root, tag):
+    out = root.parent / tag
+    proc = subprocess.run(
+        [sys.executable, "-m", "gpme.cli", "verify", "--quick", "--only", "gpme", "--model",
+         str(MY_ARM), "--out", str(root), "--no-progress", "--junit-xml", str(out / "r.xml"),
+         "--summary-md", str(out / "r.md")], cwd=REPO, capture_output=True, text=True,
+        timeout=600)
+    return proc, out
+
+
+@pytest.fixture(scope="module")
+def two_runs(tmp_path_factory):
+    """`gpme verify --quick --only gpme --model examples/my_arm/my_arm.toml` twice in one
+    --out root, with --junit-xml and --summary-md."""
+    root = tmp_path_factory.mktemp("ci") / "reports"
+    first = _cli_verify(root, "first")
+    second = _cli_verify(root, "second")
+    return root, first, second
+
+
+def test_ci_outputs_written_and_junit_valid(two_runs):
+    import xmlschema
+    schema = xmlschema.XMLSchema(JUNIT_SCHEMA)
+    for proc, out in two_runs[1:]:
+        assert proc.returncode == 0, proc.stderr
+        assert f"wrote {out / 'r.xml'}" in proc.stdout and f"wrote {out / 'r.md'}" in proc.stdout
+        schema.validate(str(out / "r.xml"))
+    root_el = ET.parse(two_runs[2][1] / "r.xml").getroot()
+    data = json.loads((two_runs[0] / "latest" / "summary.json").read_text())
+    assert int(root_el.get("tests")) == len(data["checks"])
+    assert len(root_el.findall("testsuite/testcase/skipped")) == \
+        sum(c["status"] == "info" for c in data["checks"])
+
+
+def test_markdown_summary_of_a_passing_run_fits_one_screen(two_runs):
+    root, _, (_, out) = two_runs
+    md = (out / "r.md").read_text()
+    lines = md.splitlines()
+    assert lines[0] == "## gpme verify ✅ PASSED: no check failed"
+    assert "passed, 0 failed, 1 information only** (not gated" in md
+    assert "Versions: gpme" in md and "mujoco" in md
+    run_dir = (root / "latest").resolve()
+    assert f"Report: `{root / run_dir.name / 'index.html'}`" in md
+    assert len(lines) <= 25 and max(map(len, lines)) <= 400
+
+
+def test_diff_of_two_consecutive_runs(two_runs):
+    root, (first, _), (second, out) = two_runs
+    assert "no previous run in" in first.stdout
+    runs = sorted(d.name for d in root.iterdir() if not d.name.startswith(".")
+                  and d.name != "latest")
+    assert len(runs) == 2
+    data = json.loads((root / runs[1] / "summary.json").read_text())
+    diff = data["diff"]
+    assert diff["previous"]["run_id"] == runs[0]
+    assert diff["compared"] == len(data["checks"]) and diff["compared"] >= 5
+    # the same model, code and machine: the run is deterministic, nothing grew or changed
+    assert (diff["grown"], diff["status_changed"], diff["new"], diff["vanished"],
+            diff["versions_changed"], diff["mode_changed"]) == ([], [], [], [], {}, [])
+    assert f"since {runs[0]} ({diff['compared']} checks compared): 0 check(s) with " \
+           "error/tolerance grown >10x" in second.stdout
+    assert "Since the previous run" in (out / "r.md").read_text()
+    page = (root / runs[1] / "index.html").read_text()
+    assert "<section id='diff'>" in page and runs[0] in page
+    for check in data["checks"]:            # every gated check has its ratio, information none
+        ratio = check["error_over_tolerance"]
+        assert (ratio is None) == (check["status"] == "info"), check["name"]
+        assert ratio is None or 0 <= ratio <= 1
+
+
+# ---- bad report flags: one error listing every problem, before any work ----------------
+
+@pytest.mark.parametrize("flags, words", [
+    (["--junit-xml", "{tmp}"], ["--junit-xml", "is a directory; give a file name"]),
+    (["--junit-xml", "{tmp}/a_file/r.xml"], ["--junit-xml", "a_file", "on its way is a file"]),
+    (["--summary-md", ""], ["--summary-md is empty; give a file name"]),
+    (["--junit-xml", "{tmp}/r.out", "--summary-md", "{tmp}/r.out"],
+     ["--junit-xml and --summary-md both name", "give each its own file"]),
+    (["--compare-to", "{tmp}/nowhere"], ["--compare-to", "nowhere", "does not exist",
+                                         "report directory", "summary.json"]),
+    (["--compare-to", "{tmp}/empty"], ["--compare-to", "holds no summary.json"]),
+    (["--junit-xml", "{tmp}", "--compare-to", "{tmp}/nowhere", "--model", "/nonexistent.toml"],
+     ["3 problems on the command line", "is a directory", "does not exist",
+      "/nonexistent.toml"]),
+], ids=["junit-is-a-directory", "junit-under-a-file", "summary-md-empty", "same-file-twice",
+        "compare-to-missing", "compare-to-without-summary", "three-at-once"])
+def test_bad_report_flags(flags, words, tmp_path, capsys):
+    from gpme.cli import main
+    (tmp_path / "a_file").write_text("x")
+    (tmp_path / "empty").mkdir()
+    root = tmp_path / "reports"
+    argv = ["verify", "--quick", "--out", str(root), "--no-progress",
+            *[f.replace("{tmp}", str(tmp_path)) for f in flags]]
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err and err.startswith("error: ")
+    for word in words:
+        assert word in err, word
+    assert not root.exists() or not any(root.iterdir()), "no work for a refused command"
 
 
 def _browser():

@@ -106,8 +106,22 @@ def _models_section(record):
     return parts
 
 
-def write_index(run_dir, summary, rows, runs, meta, models=()):
-    """Write run_dir/index.html atomically; ``models`` is verify's models.json record."""
+def diff_section(diff):
+    """The "since the previous run" section (HTML) of summary.json's ``diff``
+    (crosscheck.reports.run_diff): one headline, then the lists, each capped."""
+    from .run_diff import diff_lines, headline
+    if not diff:
+        return ""
+    items = [line.strip() for line in diff_lines(diff, limit=10)[1:]]
+    body = "".join(f"<li>{html.escape(i)}</li>" for i in items)
+    return (f"<section id='diff'><h2>Since the previous run</h2><p>{html.escape(headline(diff))}"
+            f"</p>{f'<ul>{body}</ul>' if body else ''}<p style='font-size:.8rem;color:#555'>"
+            f"{html.escape(diff.get('definition', ''))}.</p></section>")
+
+
+def write_index(run_dir, summary, rows, runs, meta, models=(), diff=None):
+    """Write run_dir/index.html atomically; ``models`` is verify's models.json record,
+    ``diff`` summary.json's diff against the previous run (shown below the verdict)."""
     run_dir = Path(run_dir)
     failed = summary["status"] == "fail" if "status" in summary else ~summary["passed"]
     ok = not bool(failed.any())
@@ -118,6 +132,7 @@ def write_index(run_dir, summary, rows, runs, meta, models=()):
              f"{'NO CHECK FAILED' if ok else f'{n_fail} CHECK(S) FAILED'}</strong> — "
              f"{len(summary)} checks ({n_info} information only, not gated), "
              f"{len(rows)} comparisons.</p>",
+             diff_section(diff),
              _meta_table(meta),
              "<h2 id='overview'>At a glance</h2>",
              _overview(summary, rows),
