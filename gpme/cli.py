@@ -68,6 +68,19 @@ def load_scenarios(paths):
     return scenarios
 
 
+def mujoco_name_problems(scenarios):
+    """Raise ModelError (before any work) listing the names of ``scenarios`` that MuJoCo
+    cannot take (repeated in one of its namespaces, empty, not XML characters:
+    crosscheck.mujoco.mjcf.name_problems)."""
+    from crosscheck.mujoco.cases import programme
+    from crosscheck.mujoco.mjcf import name_problems
+    from gpme_core.errors import ModelError
+    problems = [f"{s.name}: {p}" for s in scenarios
+                for p in name_problems(s.model, programme(s))]
+    if problems:
+        raise ModelError(problems)
+
+
 def _simulate_paper(args):
     """The paper's two crane runs with the paper's figures (no --model)."""
     from gpme.budget import run_budget, wall_limit
@@ -169,6 +182,8 @@ def _crosscheck(args):
     try:
         scenarios = load_scenarios(args.model) if args.model else default_scenarios(
             args.engine, args.quick)
+        if args.engine == "mujoco":
+            mujoco_name_problems(scenarios)
         estimate_runs(scenarios, args.quick, args.force)
     except GpmeError as exc:
         return _error(exc)

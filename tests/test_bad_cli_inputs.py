@@ -346,3 +346,17 @@ def test_crane_run_shorter_than_its_default_step(tmp_path, capsys):
                       str(tmp_path), "--no-progress"], capsys)
     assert code == 0, err
     assert (tmp_path / "rigid.csv").is_file()
+
+
+def test_crosscheck_mujoco_refuses_names_mujoco_cannot_take_before_any_work(tmp_path, capsys):
+    """Two drives on one joint give two MuJoCo actuators of one name: refused before the
+    estimate and any run, naming the joint."""
+    text = (ROOT / "examples" / "my_arm" / "my_arm.toml").read_text().replace(
+        'urdf = "my_arm.urdf"', f'urdf = "{ROOT / "examples" / "my_arm" / "my_arm.urdf"}"')
+    text += '\n[[drive]]\njoint = "shoulder"\ntype = "constant"\nlevel = 1.0\n' * 2
+    model = tmp_path / "two_drives.toml"
+    model.write_text(text)
+    code, err = _run(["crosscheck", "mujoco", "--model", str(model), "--out",
+                      str(tmp_path / "r"), "--no-progress"], capsys)
+    assert code == 2 and "actuator name" in err and "shoulder" in err, err
+    assert not list((tmp_path / "r").glob("*.csv"))
