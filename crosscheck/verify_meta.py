@@ -28,15 +28,23 @@ def git_commit():
         return "unknown"
 
 
+def versions():
+    """Versions of what can change a check's numbers: gpme, the two engines, the numerical
+    libraries, the robot descriptions of the examples and Python (the diff against the
+    previous run lists those that changed)."""
+    return {"gpme": _version("gpme"), "pinocchio (pin)": _version("pin"),
+            "mujoco": _version("mujoco"), "numpy": _version("numpy"),
+            "scipy": _version("scipy"), "sympy": _version("sympy"), "numba": _version("numba"),
+            "example-robot-data": _version("example-robot-data"),
+            "python": sys.version.split()[0]}
+
+
 def environment(**extra):
     """Dict of versions, machine, date and commit (plus ``extra``)."""
     return {
         "date_utc": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
         "git_commit": git_commit(),
-        "versions": {"gpme": _version("gpme"), "pinocchio (pin)": _version("pin"),
-                     "mujoco": _version("mujoco"), "numpy": _version("numpy"),
-                     "scipy": _version("scipy"), "numba": _version("numba"),
-                     "python": sys.version.split()[0]},
+        "versions": versions(),
         "machine": {"node": platform.node(), "platform": platform.platform(),
                     "processor": platform.processor() or platform.machine(),
                     "cpus": os.cpu_count()},

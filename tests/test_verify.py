@@ -201,6 +201,36 @@ def test_diff_of_two_consecutive_runs(two_runs):
         assert ratio is None or 0 <= ratio <= 1
 
 
+def _md_check(k, status="fail", quantity="|Phi_1| after transient"):
+    return {"name": f"gpme/run/crane {k}/{quantity}", "engine": "gpme", "section": "run",
+            "model": f"crane {k}", "quantity": quantity, "status": status, "n_compared": 1,
+            "n_fail": 1, "worst_abs_error": 3e-6, "worst_rel_error": None,
+            "worst_case": "2 s, RK4", "worst_entry": "t = 1.2 s", "tol_abs": 1e-8,
+            "tol_rel": 0.0, "tolerance": 1e-8, "error_over_tolerance": 300.0,
+            "reason": "task accuracy <10 nm | *Baumgarte*", "crashed": False}
+
+
+def test_markdown_summary_of_a_failing_run():
+    from crosscheck.reports.summary_md import MAX_ROWS, summary_markdown
+    doc = {"run": {"quick": False, "git_commit": "abc", "versions": {"gpme": "0.1.0"}},
+           "models": [{"name": "crane"}], "warnings": ["arm: peak angle 0.07 rad > 0.05 rad"],
+           "checks": [_md_check(k) for k in range(MAX_ROWS + 3)] +
+                     [_md_check(99, "pass"), _md_check(98, "info")]}
+    md = summary_markdown(doc, "reports/x/index.html")
+    lines = md.splitlines()
+    assert lines[0] == f"## gpme verify ❌ FAILED: {MAX_ROWS + 3} of {MAX_ROWS + 5} checks failed"
+    assert f"**1 passed, {MAX_ROWS + 3} failed, 1 information only**" in md
+    row = next(line for line in lines if "`gpme/run/crane 0/" in line)
+    # the pipes of |Phi_1| and of the reason escaped: the row keeps its six cells
+    assert row == ("| `gpme/run/crane 0/\\|Phi_1\\| after transient` | 3e-06 | 1e-08 + 0 × "
+                   "scale = 1e-08 | 300 | 2 s, RK4, t = 1.2 s | task accuracy \\<10 nm \\| "
+                   "\\*Baumgarte\\* |")
+    assert sum(line.startswith("| `gpme/") for line in lines) == MAX_ROWS
+    assert "... and 3 more failed checks (summary.json)" in md
+    assert "### Warnings" in md and "peak angle 0.07 rad" in md
+    assert "No diff recorded in this report." in md
+
+
 # ---- bad report flags: one error listing every problem, before any work ----------------
 
 @pytest.mark.parametrize("flags, words", [
@@ -277,3 +307,43 @@ def test_page_in_headless_chromium(report):
         browser.save_screenshot(str(SCREENSHOTS / "index-phone.png"))
     finally:
         browser.quit()
+
+
+# ---- the CI examples: docs/ci/github-actions-verify.yml and the GitLab job of docs/ci.md --
+
+def _verify_argv(command):
+    """The arguments of a `gpme verify ...` command line, parsed by gpme's own parser."""
+    import shlex
+    from gpme.cli import build_parser
+    words = shlex.split(command)
+    assert words[:2] == ["gpme", "verify"], command
+    return build_parser().parse_args(words[1:])
+
+
+def test_github_actions_example():
+    import yaml           # a dependency of gpme (YAML sweep files)
+    workflow = yaml.safe_load((REPO / "docs" / "ci" / "github-actions-verify.yml").read_text())
+    steps = workflow["jobs"]["verify"]["steps"]
+    runs = [s for s in steps if s.get("run", "").startswith("gpme verify")]
+    assert len(runs) == 1
+    args = _verify_argv(runs[0]["run"])
+    assert (args.quick, args.junit_xml, args.summary_md, args.model) == \
+        (True, "gpme-junit.xml", "gpme-summary.md", ["$MODEL"])
+    after = steps[steps.index(runs[0]) + 1:]
+    assert after and all(s.get("if") == "always()" for s in after), \
+        "the summary and the report must be kept when a check fails"
+    assert any("$GITHUB_STEP_SUMMARY" in s.get("run", "") and "gpme-summary.md" in s["run"]
+               for s in after)
+    assert any(s.get("uses", "").startswith("actions/upload-artifact@") for s in after)
+    install = [s for s in steps if "pip install" in s.get("run", "")]
+    assert install and "git+" in workflow["env"]["GPME_SOURCE"]
+
+
+def test_gitlab_example_in_docs():
+    import yaml           # a dependency of gpme (YAML sweep files)
+    text = (REPO / "docs" / "ci.md").read_text()
+    block = text.split("```yaml\n", 1)[1].split("```", 1)[0]
+    job = yaml.safe_load(block)["gpme-verify"]
+    args = _verify_argv(next(line for line in job["script"] if line.startswith("gpme verify")))
+    assert job["artifacts"]["reports"]["junit"] == args.junit_xml
+    assert job["artifacts"]["when"] == "always" and args.summary_md in job["artifacts"]["paths"]

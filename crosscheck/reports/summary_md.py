@@ -73,9 +73,9 @@ def diff_markdown(diff: Optional[Mapping[str, Any]]) -> list[str]:
     lines = ["", "### Since the previous run", ""]
     if not diff:
         return lines + ["No diff recorded in this report."]
-    lines.append(md_escape(headline(diff)))
     if diff.get("previous") is None:
-        return lines
+        return lines + [md_escape(diff.get("note") or "No previous run to compare with.")]
+    lines.append(md_escape(headline(diff)))
     lines.append("")
     if diff.get("note"):
         lines.append(f"- note: {md_escape(diff['note'])}")
