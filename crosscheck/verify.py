@@ -316,10 +316,11 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     if "status" not in rows.columns:
         rows["status"] = None
     rows["status"] = rows["status"].fillna(rows["passed"].map({True: "pass", False: "fail"}))
-    summary = summarise(rows, keys=("engine", "section", "model", "quantity"))
+    keys = ["engine", "section", "model", "quantity"]
+    summary = summarise(rows, keys=keys)
     summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
                                 for r in summary.itertuples()])
-    keys = ["engine", "section", "model", "quantity"]
+    # each check's error / tolerance of its worst row (the measure of the diff)
     summary = summary.merge(run_diff.check_ratios(rows, keys=keys), on=keys, how="left",
                             validate="one_to_one")
     warnings = run_warnings(rows.to_dict("records")) if "reason" in rows.columns else []

@@ -108,15 +108,21 @@ def _models_section(record):
 
 def diff_section(diff):
     """The "since the previous run" section (HTML) of summary.json's ``diff``
-    (crosscheck.reports.run_diff): one headline, then the lists, each capped."""
+    (crosscheck.reports.run_diff): one headline, then the lists, each capped, and the
+    definition of the measure folded."""
     from .run_diff import diff_lines, headline
     if not diff:
         return ""
+    if diff.get("previous") is None:
+        line = diff.get("note") or "no previous run to compare with"
+        return (f"<section id='diff'><h2>Since the previous run</h2><p>{html.escape(line)}"
+                "</p></section>")
     items = [line.strip() for line in diff_lines(diff, limit=10)[1:]]
     body = "".join(f"<li>{html.escape(i)}</li>" for i in items)
     return (f"<section id='diff'><h2>Since the previous run</h2><p>{html.escape(headline(diff))}"
-            f"</p>{f'<ul>{body}</ul>' if body else ''}<p style='font-size:.8rem;color:#555'>"
-            f"{html.escape(diff.get('definition', ''))}.</p></section>")
+            f"</p>{f'<ul>{body}</ul>' if body else ''}<details><summary>How changes are "
+            f"measured</summary><p>{html.escape(diff.get('definition', ''))}.</p></details>"
+            "</section>")
 
 
 def write_index(run_dir, summary, rows, runs, meta, models=(), diff=None):
