@@ -110,9 +110,12 @@ def test_a_failure_growing_to_infinity_is_listed():
 def test_modes_that_differ_are_said():
     cur = copy.deepcopy(CURRENT)
     cur["run"].update(quick=False, only="gpme")
-    d = run_diff.diff_summaries(PREVIOUS, cur)
+    prev = dict(PREVIOUS, models=[{"name": "crane_rigid"}, {"name": "crane_flexible_n3"}])
+    cur["models"] = [{"name": "my_arm"}]
+    d = run_diff.diff_summaries(prev, cur)
     assert d["mode_changed"] == ["--quick: quick before, full now",
-                                 "--only: all steps before, gpme now"]
+                                 "--only: all steps before, gpme now",
+                                 "models: crane_rigid, crane_flexible_n3 before, my_arm now"]
     assert any("not like for like: --quick" in line for line in run_diff.diff_lines(d))
 
 

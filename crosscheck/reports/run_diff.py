@@ -22,7 +22,8 @@ has none (``None`` in summary.json).
   gated is listed here, not under ``grown``);
 - ``new`` and ``vanished`` checks; ``versions_changed`` (engines and libraries of
   summary.json's ``run.versions``) and the commit;
-- ``mode_changed``: --quick or --only differ, so the runs are not like for like.
+- ``mode_changed``: --quick, --only or the models differ, so the runs are not like for
+  like.
 
 The diff is information for a reader; it never changes the exit status.  A missing or
 unreadable previous report gives a diff with ``previous`` None and a one-line ``note``.
@@ -173,7 +174,19 @@ def diff_summaries(previous: Optional[Mapping[str, Any]], current: Mapping[str, 
         if prun.get(key) != crun.get(key):
             out["mode_changed"].append(f"{label}: {_mode(key, prun.get(key))} before, "
                                        f"{_mode(key, crun.get(key))} now")
+    models = [_model_names(doc) for doc in (previous, current)]
+    if None not in models and models[0] != models[1]:
+        out["mode_changed"].append(f"models: {', '.join(models[0]) or 'none'} before, "
+                                   f"{', '.join(models[1]) or 'none'} now")
     return out
+
+
+def _model_names(doc: Mapping[str, Any]) -> Optional[list[str]]:
+    """Names of the models a summary.json records (None when it records none)."""
+    models = doc.get("models")
+    if not isinstance(models, list):
+        return None
+    return [str(m.get("name")) if isinstance(m, dict) else str(m) for m in models]
 
 
 def _mode(key: str, value: Any) -> str:
