@@ -110,7 +110,8 @@ def _testcase(parent: ET.Element, check: Mapping[str, Any], report_dir: str) -> 
         abs_err = check.get("worst_abs_error")
         kind = "NonFiniteValue" if abs_err is None or not math.isfinite(abs_err) \
             else "ToleranceExceeded"
-        el = ET.SubElement(case, "failure", {"type": kind, "message": _line(failure_message(check))})
+        el = ET.SubElement(case, "failure",
+                           {"type": kind, "message": _line(failure_message(check))})
         el.text = f"{failure_message(check)}\nreason for the tolerance: {reason}"
         return "fail"
     if status == "info":

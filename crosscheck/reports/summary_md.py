@@ -63,8 +63,9 @@ def _failed_section(failed: list) -> list[str]:
             tol = (f"{_num(c.get('tol_abs'))} + {_num(c.get('tol_rel'))} × scale"
                    + (f" = {_num(c.get('tolerance'))}" if c.get("tolerance") is not None else ""))
             ratio = _num(c.get("error_over_tolerance"))
-        lines.append(f"| {_code(c['name'], table=True)} | {_num(c.get('worst_abs_error'))} | {tol} | "
-                     f"{ratio} | {md_escape(where) or '-'} | {md_escape(c.get('reason') or '')} |")
+        lines.append(f"| {_code(c['name'], table=True)} | {_num(c.get('worst_abs_error'))} | "
+                     f"{tol} | {ratio} | {md_escape(where) or '-'} | "
+                     f"{md_escape(c.get('reason') or '')} |")
     return lines + ([more] if more else [])
 
 
