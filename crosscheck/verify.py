@@ -497,15 +497,20 @@ def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
     return written
 
 
-def main(args):
+def main(args, problems=()):
+    """`gpme verify`: ``problems`` found by the caller (--out, --keep) are listed with the
+    report flags' and the model files' in one message (exit 2)."""
     from gpme.budget import wall_limit
     from gpme_core.errors import GpmeError
     scenarios = None
-    problems = flag_problems(args)
+    problems = list(problems) + flag_problems(args)
     if getattr(args, "model", None):
         from gpme.cli import load_scenarios
         try:
             scenarios = load_scenarios(args.model)
+            if getattr(args, "only", None) in (None, "mujoco"):
+                from gpme.cli import mujoco_name_problems
+                mujoco_name_problems(scenarios)
         except GpmeError as exc:
             problems.append(str(exc))
     if problems:

@@ -206,12 +206,11 @@ def _crosscheck(args):
 
 
 def _verify(args):
-    if output_dir_problem(args.out):
-        return _error(output_dir_problem(args.out))
-    if args.keep is not None and args.keep < 1:
-        return _error(f"--keep must be at least 1 (the run just made), got {args.keep}")
     from crosscheck import verify
-    return verify.main(args)
+    problems = [p for p in (output_dir_problem(args.out),) if p]
+    if args.keep is not None and args.keep < 1:
+        problems.append(f"--keep must be at least 1 (the run just made), got {args.keep}")
+    return verify.main(args, problems)     # listed with the report flags' and files' problems
 
 
 def _sweep(args):
