@@ -30,7 +30,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from gpme.out_lock import exclusive_output
+from gpme.out_lock import exclusive_output, output_file_problem
 
 from .reports import run_diff
 from .reports.index_page import write_index
@@ -411,31 +411,6 @@ def estimate_runs(scenarios, quick, force):
         _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
         run_budget(scenario.name, force)(simulate_scenario(scenario, quick=quick,
                                                            estimate_only=True))
-
-
-def output_file_problem(path, flag, example):
-    """Why ``path`` cannot be written as the output file of ``flag`` (None when it can),
-    found before any work and without creating anything."""
-    import tempfile
-    text = str(path)
-    if not text.strip():
-        return f"{flag} is empty; give a file name (e.g. {flag} {example})"
-    target = Path(text)
-    if target.is_dir():
-        return (f"{flag} {text!r} is a directory; give a file name (e.g. {flag} "
-                f"{Path(text) / example})")
-    probe = target.parent
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if not probe.is_dir():
-        return f"{flag} {text!r} cannot be created: {str(probe)!r} on its way is a file"
-    try:
-        with tempfile.TemporaryFile(dir=probe):
-            pass
-    except OSError as exc:
-        return (f"{flag} {text!r} cannot be written in {str(probe)!r} ({exc.strerror or exc}); "
-                "give a path in a folder you can write")
-    return None
 
 
 def compare_to_problem(path):

@@ -60,14 +60,33 @@ def output_dir_problem(path, flag="--out", example="reports"):
     and without creating anything: an empty name, an existing file, a file on the way, a
     folder that cannot be written (a temporary file is tried in it or in the nearest
     existing folder above it)."""
-    import tempfile
     text = str(path)
     if not text.strip():
         return f"{flag} is empty; give a directory (e.g. {flag} {example})"
     target = Path(text)
     if target.exists() and not target.is_dir():
         return f"{flag} {text!r} exists and is not a directory; give a directory"
-    probe = target
+    return _unwritable(target, text, flag, "directory")
+
+
+def output_file_problem(path, flag, example):
+    """Why ``path`` cannot be written as the output file of ``flag`` (None when it can),
+    found before any work and without creating anything."""
+    text = str(path)
+    if not text.strip():
+        return f"{flag} is empty; give a file name (e.g. {flag} {example})"
+    target = Path(text)
+    if target.is_dir():
+        return (f"{flag} {text!r} is a directory; give a file name (e.g. {flag} "
+                f"{target / example})")
+    return _unwritable(target.parent, text, flag, "folder")
+
+
+def _unwritable(directory, text, flag, what):
+    """Why ``directory`` (or the nearest existing folder above it) cannot take a new file:
+    a file on the way, or no write permission (None when it can)."""
+    import tempfile
+    probe = directory
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
     if not probe.is_dir():
@@ -76,7 +95,7 @@ def output_dir_problem(path, flag="--out", example="reports"):
         with tempfile.TemporaryFile(dir=probe):
             pass
     except OSError as exc:
-        where = "written" if probe == target else f"created in {str(probe)!r}"
+        where = "written" if probe == Path(text) else f"created in {str(probe)!r}"
         return f"{flag} {text!r} cannot be {where} ({exc.strerror or exc}); give a " \
-               "directory you can write"
+               f"{what} you can write"
     return None
