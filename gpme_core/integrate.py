@@ -22,8 +22,8 @@ import pandas as pd
 from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
-from .errors import ConstraintError, ModelError, SimulationError, UnstableStepError
-from .errors import GpmeError as GpmeErrorBase
+from .errors import (ConstraintError, GpmeError, ModelError, SimulationError,
+                     UnstableStepError)
 from .gpme import SWITCH_RCOND, partition_rcond
 from .run_cost import estimate_run, time_evaluation
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
@@ -187,7 +187,7 @@ def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
     the last recorded state before the failure (else leave the original error)."""
     try:
         limit, mode = rk4_limit(partition.system, t_good, y_good[:n], y_good[n:2 * n])
-    except (ArithmeticError, ValueError, np.linalg.LinAlgError, GpmeErrorBase):
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError, GpmeError):
         return
     if dt > limit:
         raise UnstableStepError(

@@ -21,9 +21,9 @@ from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, Joint
                                    SympyPointConstraint)
 from gpme_core.errors import ConstraintError, ModelError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
-from gpme_core.integrate import rk4_stability_step, suggest_rk4_step
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import Drive, Frame, Model, validate_model
+from gpme_core.stability import STEP_SAFETY, rk4_limit
 from gpme_core.statics import static_equilibrium
 from gpme_core.time_functions import SympyTimeFunction, Tabulated
 from gpme_io.scenario import Scenario
@@ -32,7 +32,7 @@ from . import expressions as ex
 from .schema import (CoordinateConstraintSpec, CraneSource, EllipseConstraintSpec,
                      ExpressionConstraintSpec, ModelFile, UrdfSource)
 
-STEP_SAFETY = 0.5       # fraction of the RK4 stability step used when dt is not given
+# STEP_SAFETY (gpme_core.stability): fraction of the RK4 stability step used when dt is not given
 
 
 @dataclass(frozen=True)
@@ -337,10 +337,7 @@ def _on_constraints(system: ProgrammedMotion, q0, q_dot0, label: str):
 
 def suggested_step(system: ProgrammedMotion, q0, output_dt: float) -> float:
     """s: STEP_SAFETY x the RK4 stability step of the linearised springs, dampers and
-    inertia at q0 (gpme_core.integrate.suggest_rk4_step) and of the Baumgarte dynamics
-    s^2 + 2 alpha s + beta^2 = 0, at most ``output_dt``."""
-    step = suggest_rk4_step(system.model, q0, safety=STEP_SAFETY)
-    if system.n_constraints:
-        for root in np.roots([1.0, 2.0 * system.alpha, system.beta ** 2]):
-            step = min(step, STEP_SAFETY * rk4_stability_step(root))
-    return float(min(step, output_dt))
+    inertia at q0 and of the Baumgarte dynamics s^2 + 2 alpha s + beta^2 = 0
+    (gpme_core.stability, the "springs" estimate), at most ``output_dt``."""
+    limit, _ = rk4_limit(system, 0.0, q0, np.zeros_like(q0), how="springs")
+    return float(min(STEP_SAFETY * limit, output_dt))
