@@ -34,6 +34,7 @@ from gpme.out_lock import exclusive_output, output_file_problem
 
 from .reports import run_diff
 from .reports.index_page import write_index
+from .reports.rows import normalise, write_rows
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
@@ -82,7 +83,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
         rows += run_rows(crane_scenario(n), runs[case])
     paper.write_outputs(runs, run_dir / "paper")
     df = rows_frame(rows)
-    write_csv(df, run_dir / "gpme.csv")
+    write_rows(df, run_dir, "gpme")
     return df, runs
 
 
@@ -99,7 +100,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
         write_run_outputs(scenario, df, run_dir / "runs")
         rows += run_rows(scenario, df)
     df = rows_frame(rows)
-    write_csv(df, run_dir / "gpme.csv")
+    write_rows(df, run_dir, "gpme")
     return df
 
 
@@ -307,15 +308,9 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         failed = int(_failed(tables[step]).sum())
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
-    rows = pd.concat(tables.values(), ignore_index=True)
-    if "section" not in rows.columns:
-        rows["section"] = None
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
     # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
-    rows["section"] = rows["section"].fillna("terms")
-    if "status" not in rows.columns:
-        rows["status"] = None
-    rows["status"] = rows["status"].fillna(rows["passed"].map({True: "pass", False: "fail"}))
+    rows = normalise(pd.concat(tables.values(), ignore_index=True))
     keys = ["engine", "section", "model", "quantity"]
     summary = summarise(rows, keys=keys)
     summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"

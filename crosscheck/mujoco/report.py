@@ -6,7 +6,8 @@ from matplotlib.figure import Figure
 
 from ..compare import FAIL, INFO, row_status
 from ..reports.tables import (atomic_write_bytes, atomic_write_text, figure_data_uri,
-                              html_page, html_table, summarise, worst_first, write_csv)
+                              html_page, html_table, summarise, worst_first)
+from ..reports.rows import write_rows
 
 TINY = 1e-18   # floor for log plots of differences
 MAX_PLOTTED = 5
@@ -92,7 +93,7 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
     df: the tidy table; convergence: one row per (scenario, mechanism setting); plots:
     {(section, model name): (model, gpme DataFrame, MuJoCo DataFrame or {label: DataFrame})};
     quick: CI run or full; scenario_names: the scenarios run."""
-    write_csv(df, out_dir / "mujoco.csv")
+    write_rows(df, out_dir, "mujoco")
     st = row_status(df)
     n_fail, n_info = int((st == FAIL).sum()), int((st == INFO).sum())
     ok = n_fail == 0

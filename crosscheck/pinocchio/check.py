@@ -60,6 +60,7 @@ from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
                                     reference_constraints)
 from ..reports import tables as report
+from ..reports.rows import write_rows
 from ..sampling import state_ranges
 from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
 
@@ -569,7 +570,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
-    report.write_csv(df, out_dir / "pinocchio.csv")
+    write_rows(df, out_dir, ENGINE)
     report.atomic_write_text(out_dir / "pinocchio.html",
                              _html(df, records, skipped, wall, quick))
     return df
