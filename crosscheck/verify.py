@@ -231,6 +231,16 @@ def _models_record(scenarios):
     return out
 
 
+def _model_names(scenarios, quick, only=None):
+    """{"coordinates": set, "constraints": set}: the names of every model the run compared
+    (the index's matrix groups quantities that differ only in one of them)."""
+    if scenarios is None:
+        scenarios = [s for step in STEPS if not only or step == only
+                     for s in default_scenarios(step, quick)]
+    return {"coordinates": {c for s in scenarios for c in s.model.coordinate_names},
+            "constraints": {c for s in scenarios for c in s.system.constraint_names}}
+
+
 def previous_report(root, compare_to=None):
     """(summary.json document or None, where it was looked for, one-line note or None): the
     report to diff this run against, read before the run starts: ``compare_to`` (a report
@@ -333,7 +343,8 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     previous_doc, source, note = previous
     document["diff"] = run_diff.diff_summaries(previous_doc, document, source=source, note=note)
     atomic_write_text(staging / "summary.json", json.dumps(document, indent=1))
-    write_index(staging, summary, rows, runs, meta, record, diff=document["diff"])
+    write_index(staging, summary, rows, runs, meta, record, diff=document["diff"],
+                names=_model_names(scenarios, quick, only))
     (staging / OWNER_FILE).unlink()
     with exclusive_output(root):            # one publisher at a time: name and `latest`
         final, run_id = _publish(root, staging, run_id)

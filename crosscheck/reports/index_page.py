@@ -1,10 +1,24 @@
-"""index.html of a `gpme verify` run: summary first, then the paper figures, then one
-section per engine with its worst cases and plots.  Self-contained (images as data URIs)."""
-import base64
-import html
+"""index.html of a `gpme verify` run (templates/index.html.j2).
+
+First screen: the verdict (counts, each engine with its version, the failing checks, what
+changed since the previous run), the matrix of quantities x models coloured by error /
+tolerance (crosscheck.reports.matrix) and the key plots.  Below: every check, folded by
+engine and model and filterable by status and text, each linked to its rows (CSV slice) and
+plot; the reasons for the tolerances once, as a side table; the runs' figures and
+histories; the models; the files; the run's versions and machine.
+
+Images are linked, not embedded: each plot is stored once, as a PNG of the report.
+"""
 from pathlib import Path
 
-from .tables import atomic_write_text, html_page, html_table, worst_first
+from markupsafe import Markup
+
+from ..compare import FAIL, INFO, PASS
+from .check_plots import write_spread_plots
+from .html import render, table as html_table_data
+from .matrix import legend, matrix_blocks
+from .rows import CHECKS_DIR, check_id, slice_path
+from .tables import atomic_write_text
 
 PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
                   "flexible crane (paper Fig. 2)"),
@@ -13,81 +27,192 @@ PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time,
                  ("constraint_violation.png", "|Phi_1| and |Phi_2| against time (log scale)"))
 ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
                  "mujoco": "MuJoCo (terms and full runs)"}
-WORST_ROWS = 15
-ROW_COLUMNS = ["section", "model", "quantity", "case", "entry", "gpme_value", "engine_value",
-               "abs_error", "rel_error", "tol_abs", "tol_rel", "status", "reason"]
+ENGINE_VERSION_KEYS = {"gpme": "gpme", "pinocchio": "pinocchio (pin)", "mujoco": "mujoco"}
+MAX_FAILING_LISTED = 8
+MAX_KEY_PLOTS = 3
+FILE_NOTES = {
+    "summary.json": "one entry per check, the run's versions, warnings and the diff",
+    "summary.csv": "one row per check",
+    "models.json": "what each model is made of",
+    "tolerances.csv": "tol_id, tol_abs, tol_rel and reason of the comparison rows",
+    CHECKS_DIR: "the comparison rows, one gzip CSV per check (checks/index.csv lists them)",
+    "plots": "spread of each check group's error / tolerance",
+    "pinocchio.html": "the Pinocchio crosscheck's own page",
+    "mujoco.html": "the MuJoCo crosscheck's own page",
+    "urdf": "the URDFs written for Pinocchio",
+    "paper": "the paper's runs: histories and figures",
+    "runs": "each model's run: histories and figures",
+}
 
 
-def _img(path, alt):
-    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
-    return (f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(alt)}'>"
-            f"<figcaption>{html.escape(alt)}</figcaption></figure>")
+def _fmt(v, digits=3):
+    if v is None or v != v:
+        return "-"
+    return f"{v:.{digits}g}" if 1e-3 <= abs(v) < 1e5 or v == 0 else f"{v:.{digits - 1}e}"
 
 
-def _meta_table(meta):
-    items = [("date", meta["date_utc"]), ("git commit", meta["git_commit"]),
-             ("mode", "quick (CI-sized)" if meta.get("quick") else "full"),
-             ("wall time", f"{meta['wall_time_s']:.1f} s")]
-    items += [(k, v) for k, v in meta["versions"].items()]
-    m = meta["machine"]
-    items.append(("machine", f"{m['node']}, {m['platform']}, {m['processor']}, {m['cpus']} CPUs"))
-    cells = "".join(f"<tr><th class='l'>{html.escape(k)}</th><td class='l'>{html.escape(str(v))}"
-                    f"</td></tr>" for k, v in items)
-    return f"<table class='meta'>{cells}</table>"
+def diff_section(diff):
+    """The "since the previous run" section (HTML) of summary.json's ``diff``
+    (crosscheck.reports.run_diff): one headline, then the lists, each capped, and the
+    definition of the measure folded."""
+    from .run_diff import diff_lines, headline
+    if not diff:
+        return Markup("")
+    if diff.get("previous") is None:
+        return Markup(render("diff.html.j2", line=diff.get("note") or
+                             "no previous run to compare with", items=[], definition=None))
+    items = [line.strip() for line in diff_lines(diff, limit=10)[1:]]
+    return Markup(render("diff.html.j2", line=headline(diff), items=items,
+                         definition=diff.get("definition", "")))
 
 
-def _overview(summary, rows):
-    """One line per engine: checks, failures, comparisons, the check closest to its
-    tolerance (largest error / (tol_abs + tol_rel * scale) over gated comparisons)."""
-    import numpy as np
-    import pandas as pd
-    out = []
-    ranked = worst_first(rows)
+def _status_counts(summary):
+    return {st: int((summary["status"] == st).sum()) for st in (FAIL, PASS, INFO)}
+
+
+def _verdict(summary, rows, meta, diff):
+    from .run_diff import headline
+    counts = _status_counts(summary)
+    ok = counts[FAIL] == 0
+    failing = summary[summary["status"] == FAIL]
+    listed = [{"id": check_id(r["check"]), "name": r["check"],
+               "detail": (f"error {_fmt(r['worst_abs_error'])} > tolerance "
+                          f"{_fmt(r['tolerance'])} (x{_fmt(r['error_over_tolerance'])}), "
+                          f"at {r['worst_case']} {r['worst_entry']}")}
+              for r in failing.head(MAX_FAILING_LISTED).to_dict("records")]
+    engines = []
     for engine, g in summary.groupby("engine", sort=False):
-        r = ranked[(ranked["engine"] == engine) & np.isfinite(ranked["error_over_tolerance"])]
-        worst = r.iloc[0] if len(r) else None
-        status = g["status"] if "status" in g else g["passed"].map({True: "pass", False: "fail"})
-        out.append({"engine": engine, "checks": len(g), "failed": int((status == "fail").sum()),
-                    "information only": int((status == "info").sum()),
-                    "comparisons": int((rows["engine"] == engine).sum()),
-                    "closest to tolerance": "-" if worst is None else
-                    f"{worst['section']} / {worst['model']} / {worst['quantity']}",
-                    "error / tolerance": np.nan if worst is None else worst["error_over_tolerance"],
-                    "passed": not (status == "fail").any()})
-    return html_table(pd.DataFrame(out), left_columns=("engine", "closest to tolerance"))
+        version = meta.get("versions", {}).get(ENGINE_VERSION_KEYS.get(engine, engine), "")
+        n_fail = int((g["status"] == FAIL).sum())
+        engines.append({"engine": engine, "n_fail": n_fail,
+                        "text": f"{engine} {version}: {len(g)} checks, "
+                                + (f"{n_fail} FAILED" if n_fail else "none failed")})
+    if diff and diff.get("previous") is not None:
+        changes = headline(diff).split(": ", 1)[-1]
+        changes = f"{changes} (against {diff['previous'].get('run_id') or diff['previous'].get('source')})"
+    else:
+        changes = (diff or {}).get("note") or "no previous run to compare with"
+    mode = "quick (CI-sized)" if meta.get("quick") else "full"
+    return {"ok": ok,
+            "headline": (f"all {counts[PASS]} gated checks pass" if ok else
+                         f"{counts[FAIL]} of {counts[FAIL] + counts[PASS]} gated checks FAILED"),
+            "counts": (f"{len(summary)} checks: {counts[PASS]} pass, {counts[FAIL]} fail, "
+                       f"{counts[INFO]} information only (no tolerance, never counted as a "
+                       f"pass); {len(rows)} comparisons."),
+            "engines": engines, "failing": listed,
+            "more_failing": max(0, len(failing) - MAX_FAILING_LISTED),
+            "changes": changes,
+            "run": (f"{mode} run {meta.get('run_id', '')}, {meta.get('date_utc', '')}, commit "
+                    f"{str(meta.get('git_commit', ''))[:12]}, {meta.get('wall_time_s', 0):.0f} s "
+                    "wall.")}
 
 
-def _summary_table(summary):
-    cols = [c for c in ("status", "passed") if c in summary][:1] + ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
-            "worst_rel_error", "tol_abs", "tol_rel"]
-    df = summary[cols].copy()
-    table = html_table(df, left_columns=("engine", "section", "model", "quantity"))
-    # link each check to its engine section
-    for engine in summary["engine"].unique():
-        table = table.replace(f"<td class='l'>{html.escape(engine)}</td>",
-                              f"<td class='l'><a href='#engine-{engine}'>{html.escape(engine)}</a></td>")
-    return table.replace("<table>", "<table id='summary'>", 1)
+def _engine_plot(run_dir, engine, section, model, spreads):
+    """Relative path of the plot a check links to: the engine's own plot of that run if
+    there is one, else the spread plot of its group."""
+    from gpme.runs import slug
+    candidates = [f"{engine}_{section}_{model}.png"]
+    if engine == "gpme":
+        candidates += [f"runs/{slug(model)}_constraints.png", "paper/constraint_violation.png"]
+    for c in candidates:
+        if (run_dir / c).is_file():
+            return c
+    spread = spreads.get((engine, section, model))
+    return str(spread) if spread else None
 
 
-def _benchmark_section(bench_dir):
-    """The latest `python -m benchmarks.bench` results beside the runs, if there are any."""
-    png, evals, runs = (bench_dir / "evaluation_costs.png", bench_dir / "evaluation_costs.csv",
-                        bench_dir / "run_costs.csv")
-    if not (png.exists() and evals.exists() and runs.exists()):
-        return []
-    import pandas as pd
-    return ["<h2 id='benchmarks'>Benchmarks (latest python -m benchmarks.bench)</h2>",
-            "<p>Measured separately from this run; see docs/benchmarks.md for the method. "
-            f"Files: <a href='../benchmarks/'>../benchmarks/</a>.</p>",
-            html_table(pd.read_csv(evals), status_column="-"),
-            html_table(pd.read_csv(runs), status_column="-", left_columns=("case", "engine", "method")),
-            _img(png, "cost of one constrained q_ddot evaluation against the number of coordinates")]
+def _reasons(summary):
+    """{reason text: id} numbered in order of first appearance, and the side table."""
+    ids, table = {}, []
+    for reason, g in summary.groupby("reason", sort=False):
+        ids[reason] = len(ids) + 1
+        table.append({"id": ids[reason], "text": reason, "n": len(g)})
+    return ids, table
 
 
-def _models_section(record):
-    """What each compared model is made of: source, chain, frozen joints, flexible links,
-    constraints and what the reader left out of M, h, g."""
-    parts = ["<h2 id='models'>Models</h2>"]
+def _engines(run_dir, summary, spreads, reason_ids):
+    order = {FAIL: 0, PASS: 1, INFO: 2}
+    out = []
+    for engine, eg in summary.groupby("engine", sort=False):
+        models = []
+        for model, mg in eg.groupby("model", sort=False):
+            ranked = mg.assign(_o=mg["status"].map(order),
+                               _r=mg["error_over_tolerance"].fillna(-1.0)) \
+                .sort_values(["_o", "_r"], ascending=[True, False], kind="stable")
+            checks = []
+            for r in ranked.to_dict("records"):
+                rows_file = slice_path(r["check"])
+                checks.append({
+                    "id": check_id(r["check"]), "status": r["status"],
+                    "section": r["section"], "quantity": r["quantity"],
+                    "n_compared": int(r["n_compared"]),
+                    "abs_error": _fmt(r["worst_abs_error"]),
+                    "rel_error": _fmt(r["worst_rel_error"]),
+                    "ratio": "info" if r["status"] == INFO else _fmt(r["error_over_tolerance"]),
+                    "tolerance": _fmt(r["tolerance"]),
+                    "reason": r["reason"], "reason_id": reason_ids[r["reason"]],
+                    "rows_href": str(rows_file) if (run_dir / rows_file).is_file() else None,
+                    "plot_href": _engine_plot(run_dir, engine, r["section"], model, spreads)})
+            counts = _status_counts(mg)
+            models.append({"model": model, "checks": checks, "open": counts[FAIL] > 0,
+                           "summary": _count_text(counts)})
+        links = [{"href": f, "text": f} for f in (f"{engine}.html",) if (run_dir / f).is_file()]
+        if (run_dir / CHECKS_DIR / engine).is_dir():
+            links.append({"href": f"{CHECKS_DIR}/{engine}/", "text": f"{CHECKS_DIR}/{engine}/ "
+                          "(rows, one file per check)"})
+        out.append({"engine": engine, "title": ENGINE_TITLES.get(engine, engine),
+                    "summary": _count_text(_status_counts(eg)), "links": links,
+                    "models": models})
+    return out
+
+
+def _count_text(counts):
+    return (f"({counts[PASS]} pass, {counts[FAIL]} fail, {counts[INFO]} info)"
+            if counts[FAIL] else f"({counts[PASS]} pass, {counts[INFO]} info)")
+
+
+def _runs_section(run_dir):
+    """The run histories and figures: paper/ (the default crane run) or runs/."""
+    paper, runs = run_dir / "paper", run_dir / "runs"
+    if paper.is_dir():
+        figures = [{"src": f"paper/{name}", "caption": caption}
+                   for name, caption in PAPER_FIGURES if (paper / name).is_file()]
+        return {"title": "The paper's simulations",
+                "text": ("Crane of docs/crane.md: rigid arm and RFEM-flexible arm, flexible "
+                         "support, drive torque ramp, programmed ellipse and height."),
+                "files": [{"href": f"paper/{p.name}", "note": "run history (columns: "
+                           "reports/README.md)"} for p in sorted(paper.glob("*.csv*"))],
+                "figures": figures}
+    if runs.is_dir():
+        return {"title": "Each model's own run",
+                "text": "Histories and figures of the gpme runs (columns: reports/README.md).",
+                "files": [{"href": f"runs/{p.name}", "note": ""} for p in
+                          sorted(runs.iterdir()) if p.suffix != ".png"],
+                "figures": [{"src": f"runs/{p.name}", "caption": p.stem.replace("_", " ")}
+                            for p in sorted(runs.glob("*.png"))]}
+    return None
+
+
+def _key_plots(run_dir, summary, spreads, runs):
+    """The worst gated check's plot, then the run figures, at most MAX_KEY_PLOTS."""
+    plots = []
+    gated = summary[summary["status"] != INFO]
+    if len(gated):
+        order = gated.assign(_f=gated["status"] == FAIL).sort_values(
+            ["_f", "error_over_tolerance"], ascending=[False, False], kind="stable")
+        worst = order.iloc[0]
+        href = _engine_plot(run_dir, worst["engine"], worst["section"], worst["model"], spreads)
+        if href:
+            word = "failing" if worst["status"] == FAIL else "closest to its tolerance"
+            plots.append({"src": href, "caption": f"The check {word}: {worst['check']} "
+                          f"(error / tolerance {_fmt(worst['error_over_tolerance'])})"})
+    if runs:
+        plots += [p for p in runs["figures"] if p["src"] not in {q["src"] for q in plots}]
+    return plots[:MAX_KEY_PLOTS]
+
+
+def _models(record):
+    out = []
     for m in record:
         items = [("source", m["source"]), ("URDF", m["urdf"] or "-"),
                  ("chain (root, tip)", " -> ".join(m["chain"]) if m["chain"] else "-"),
@@ -97,88 +222,69 @@ def _models_section(record):
                  ("flexible links", ", ".join(m["flexible_links"]) or "none"),
                  ("constraints", ", ".join(m["constraints"]) or "none"),
                  ("dependent coordinates", ", ".join(m["dependent"]) or "-")]
-        cells = "".join(f"<tr><th class='l'>{html.escape(k)}</th><td class='l'>"
-                        f"{html.escape(str(v))}</td></tr>" for k, v in items)
-        notes = "".join(f"<li>{html.escape(n)}</li>" for n in m["notes"])
-        parts.append(f"<h3>{html.escape(m['name'])}</h3><table class='meta'>{cells}</table>"
-                     + (f"<p>Accepted from the model description but left out of M, h, g, or "
-                        f"replaced:</p><ul>{notes}</ul>" if notes else ""))
-    return parts
+        out.append({"name": m["name"], "facts": items, "notes": list(m["notes"])})
+    return out
 
 
-def diff_section(diff):
-    """The "since the previous run" section (HTML) of summary.json's ``diff``
-    (crosscheck.reports.run_diff): one headline, then the lists, each capped, and the
-    definition of the measure folded."""
-    from .run_diff import diff_lines, headline
-    if not diff:
-        return ""
-    if diff.get("previous") is None:
-        line = diff.get("note") or "no previous run to compare with"
-        return (f"<section id='diff'><h2>Since the previous run</h2><p>{html.escape(line)}"
-                "</p></section>")
-    items = [line.strip() for line in diff_lines(diff, limit=10)[1:]]
-    body = "".join(f"<li>{html.escape(i)}</li>" for i in items)
-    return (f"<section id='diff'><h2>Since the previous run</h2><p>{html.escape(headline(diff))}"
-            f"</p>{f'<ul>{body}</ul>' if body else ''}<details><summary>How changes are "
-            f"measured</summary><p>{html.escape(diff.get('definition', ''))}.</p></details>"
-            "</section>")
+def _meta_items(meta):
+    items = [("date", meta["date_utc"]), ("git commit", meta["git_commit"]),
+             ("mode", "quick (CI-sized)" if meta.get("quick") else "full"),
+             ("wall time", f"{meta['wall_time_s']:.1f} s")]
+    items += [(f"{k} time", f"{v:.1f} s") for k, v in meta.get("step_times_s", {}).items()]
+    items += list(meta["versions"].items())
+    m = meta["machine"]
+    items.append(("machine", f"{m['node']}, {m['platform']}, {m['processor']}, {m['cpus']} CPUs"))
+    return items
 
 
-def write_index(run_dir, summary, rows, runs, meta, models=(), diff=None):
-    """Write run_dir/index.html atomically; ``models`` is verify's models.json record,
-    ``diff`` summary.json's diff against the previous run (shown below the verdict)."""
+def _files(run_dir):
+    out = []
+    for p in sorted(run_dir.iterdir()):
+        if p.name.startswith(".") or p.name == "index.html":
+            continue
+        note = FILE_NOTES.get(p.name) or ("traceback of a crashed step" if p.name.endswith(
+            "_crash.txt") else "plot" if p.suffix == ".png" else "")
+        out.append({"href": p.name + ("/" if p.is_dir() else ""), "note": note})
+    return out
+
+
+def _benchmarks(bench_dir):
+    """The latest `python -m benchmarks.bench` results beside the runs, if there are any."""
+    png, evals, runs = (bench_dir / "evaluation_costs.png", bench_dir / "evaluation_costs.csv",
+                        bench_dir / "run_costs.csv")
+    if not (png.exists() and evals.exists() and runs.exists()):
+        return None
+    import pandas as pd
+    return {"tables": [html_table_data(pd.read_csv(evals), status_column="-"),
+                       html_table_data(pd.read_csv(runs), status_column="-",
+                                       left_columns=("case", "engine", "method"))],
+            "figure": "../benchmarks/evaluation_costs.png"}
+
+
+def write_index(run_dir, summary, rows, runs, meta, models=(), diff=None, names=None):
+    """Write run_dir/index.html (and the spread plots under run_dir/plots/) atomically.
+
+    summary: verify's one row per check (check, engine, section, model, quantity, status,
+    error_over_tolerance, tolerance, worst_*, reason); rows: all comparison rows; runs:
+    unused (kept for callers); meta: verify_meta.environment(); models: models.json's
+    record; diff: summary.json's diff against the previous run; names: {"coordinates":
+    names, "constraints": names} of the models, to group the matrix rows."""
     run_dir = Path(run_dir)
-    failed = summary["status"] == "fail" if "status" in summary else ~summary["passed"]
-    ok = not bool(failed.any())
-    n_fail = int(failed.sum())
-    n_info = int((summary["status"] == "info").sum()) if "status" in summary else 0
-    parts = [f"<h1>gpme verification report</h1>",
-             f"<p class='banner {'ok' if ok else 'bad'}'><strong>"
-             f"{'NO CHECK FAILED' if ok else f'{n_fail} CHECK(S) FAILED'}</strong> — "
-             f"{len(summary)} checks ({n_info} information only, not gated), "
-             f"{len(rows)} comparisons.</p>",
-             diff_section(diff),
-             _meta_table(meta),
-             "<h2 id='overview'>At a glance</h2>",
-             _overview(summary, rows),
-             "<h2 id='summary-h'>Summary: one row per check</h2>",
-             "<p>A check passes when, for every compared state or run, the largest absolute "
-             "difference is at most tol_abs + tol_rel × max|engine value|. rel_error is that "
-             "difference over max|engine value|. Column definitions: reports/README.md.</p>",
-             _summary_table(summary)]
-    parts += _models_section(models)
-    run_figs = sorted((run_dir / "runs").glob("*.png")) if (run_dir / "runs").exists() else []
-    if run_figs:
-        parts.append("<h2 id='runs'>Runs</h2><p>Histories: runs/&lt;model&gt;.csv.</p>")
-        parts += [_img(p, p.stem.replace("_", " ")) for p in run_figs]
-    paper_dir = run_dir / "paper"
-    if paper_dir.exists():
-        parts.append("<h2 id='paper'>The paper's simulations</h2>")
-        parts.append("<p>Crane of docs/crane.md: rigid arm and RFEM-flexible arm, flexible "
-                     "support, drive torque ramp, programmed ellipse and height; the run "
-                     "histories are paper/rigid.csv and paper/flexible.csv.</p>")
-        for name, caption in PAPER_FIGURES:
-            if (paper_dir / name).exists():
-                parts.append(_img(paper_dir / name, caption))
-    for engine in rows["engine"].unique():
-        sub = rows[rows["engine"] == engine]
-        parts.append(f"<h2 id='engine-{engine}'>{html.escape(ENGINE_TITLES.get(engine, engine))}</h2>")
-        links = [f"<a href='{f}'>{f}</a>" for f in (f"{engine}.html", f"{engine}.csv",
-                                                      "gpme.csv" if engine == "gpme" else "")
-                 if f and (run_dir / f).exists()]
-        if links:
-            parts.append(f"<p>Full results: {', '.join(links)}.</p>")
-        parts.append(f"<h3>Worst cases (failures first, then by error over tolerance)</h3>")
-        cols = [c for c in ROW_COLUMNS if c in sub.columns]
-        parts.append(html_table(worst_first(sub)[cols], max_rows=WORST_ROWS,
-                                left_columns=("section", "model", "quantity", "case", "entry",
-                                              "reason")))
-        for png in sorted(run_dir.glob(f"{engine}_*.png")):
-            parts.append(_img(png, png.stem.replace("_", " ")))
-    parts += _benchmark_section(run_dir.parent / "benchmarks")
-    extra_css = ("<style>.banner{padding:.5rem;border-radius:4px}.ok{background:#dfd}"
-                 ".bad{background:#fdd}table.meta{margin:.5rem 0}figure{margin:1rem 0}"
-                 "figcaption{font-size:.85rem;color:#555}</style>")
-    atomic_write_text(run_dir / "index.html",
-                      html_page("gpme verification report", extra_css + "".join(parts)))
+    names = names or {}
+    spreads = write_spread_plots(run_dir, rows)
+    reason_ids, reasons = _reasons(summary)
+    runs_section = _runs_section(run_dir)
+    page = render("index.html.j2", title="gpme verification report",
+                  verdict=_verdict(summary, rows, meta, diff),
+                  blocks=matrix_blocks(summary, names.get("coordinates", ()),
+                                       names.get("constraints", ()),
+                                       titles=ENGINE_TITLES),
+                  legend=legend(),
+                  key_plots=_key_plots(run_dir, summary, spreads, runs_section),
+                  diff_html=diff_section(diff) if diff else Markup(""),
+                  n_checks=len(summary), status_counts=_status_counts(summary),
+                  engines=_engines(run_dir, summary, spreads, reason_ids),
+                  reasons=reasons, runs=runs_section, models=_models(models),
+                  files=_files(run_dir), meta_items=_meta_items(meta),
+                  benchmarks=_benchmarks(run_dir.parent / "benchmarks"))
+    atomic_write_text(run_dir / "index.html", page)

@@ -1,0 +1,84 @@
+"""HTML of the reports through Jinja2 templates (crosscheck/reports/templates/), with
+autoescaping on: every name, value and reason from a model or an engine is escaped by the
+template engine, never by hand.
+
+Tables are passed to the templates as :class:`Table` (column names, which are left-aligned,
+and formatted cells with each row's status), so number formatting lives in one place
+(:func:`number`) and the markup in one macro (templates/macros.html.j2).
+"""
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..compare import FAIL, row_status
+
+TEMPLATES = Path(__file__).with_name("templates")
+
+
+def number(v):
+    """A cell value as text: floats in 6 significant digits, scientific below 1e-3 and from
+    1e5 on; NaN as "-"; anything else as str."""
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        if v != v:
+            return "-"
+        if v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e5) and np.isfinite(v):
+            return f"{v:.3e}"
+        return f"{v:.6g}"
+    if isinstance(v, (np.integer,)):
+        return str(int(v))
+    return "" if v is None else str(v)
+
+
+@dataclass
+class Table:
+    """A table for the ``table`` macro: ``columns`` (names), ``left`` (names of the
+    left-aligned text columns), ``rows`` (each: {"status": "pass"|"fail"|"info"|None,
+    "cells": [text, ...]}); the status column's cell shows FAIL in capitals."""
+    columns: list
+    left: set = field(default_factory=set)
+    rows: list = field(default_factory=list)
+    status_column: str = None
+
+
+def table(df, status_column=None, max_rows=None, left_columns=()):
+    """:class:`Table` of a DataFrame.  status_column: "status" (pass/fail/info strings) or
+    "passed" (booleans); default "status" when present, else "passed"; a name the table
+    lacks (e.g. "-") colours nothing."""
+    if max_rows is not None:
+        df = df.head(max_rows)
+    if status_column is None:
+        status_column = "status" if "status" in df.columns else "passed"
+    statuses = list(row_status(df)) if status_column in df.columns else [None] * len(df)
+    rows = []
+    for values, st in zip(df.itertuples(index=False, name=None), statuses):
+        cells = [("FAIL" if st == FAIL else st) if c == status_column else number(v)
+                 for c, v in zip(df.columns, values)]
+        rows.append({"status": st, "cells": cells})
+    return Table([str(c) for c in df.columns], {str(c) for c in left_columns}, rows,
+                 status_column if status_column in df.columns else None)
+
+
+@lru_cache(maxsize=1)
+def environment():
+    """The Jinja2 environment of the report templates (autoescape, undefined names are
+    errors, the ``number`` filter)."""
+    import jinja2
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+                             autoescape=True, undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True)
+    env.filters["number"] = number
+    return env
+
+
+def render(template, **context):
+    """The text of ``template`` (a file name in templates/) rendered with ``context``."""
+    return environment().get_template(template).render(**context)
+
+
+def render_table(tab, table_id=None):
+    """The HTML of one :class:`Table` (the ``table`` macro alone)."""
+    macro = environment().get_template("macros.html.j2").module.table
+    return str(macro(tab, table_id))
