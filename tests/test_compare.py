@@ -107,5 +107,12 @@ def test_worst_first_puts_failures_first_and_info_last():
 
 def test_html_table_marks_each_status():
     page = html_table(_table())
-    assert page.count("<tr class='info'>") == 2 and page.count("<tr class='fail'>") == 2
-    assert page.count("<tr class='pass'>") == 2 and "<td class='st'>FAIL</td>" in page
+    assert page.count('<tr class="info">') == 2 and page.count('<tr class="fail">') == 2
+    assert page.count('<tr class="pass">') == 2 and '<td class="st">FAIL</td>' in page
+
+
+def test_html_table_escapes_every_cell():
+    """Names and reasons from a model reach the page escaped (Jinja2 autoescape)."""
+    df = _table().assign(reason="<script>alert(1)</script> & 'x'")
+    page = html_table(df.assign(model="a<b"), left_columns=("model", "reason"))
+    assert "<script>" not in page and "&lt;script&gt;" in page and "a&lt;b" in page

@@ -34,7 +34,10 @@ def test_quick_run_passes_and_writes_the_report(quick_run):
     assert len(csv) == len(df)
     assert {"section", "case", "coordinate", "metric", "abs_error", "status", "reason"} <= set(csv)
     page = (out / "mujoco.html").read_text()
-    assert "data:image/png;base64," in page and "Soft-equality mechanism" in page
+    assert "Soft-equality mechanism" in page and "data:image" not in page
+    # each plot stored once, as a PNG beside the page, and linked from it
+    pngs = sorted(p.name for p in out.glob("mujoco_*.png"))
+    assert pngs and all(f'src="{name}"' in page for name in pngs)
 
 
 def test_exact_rows_are_gated_by_the_integrator_error(quick_run):

@@ -194,7 +194,7 @@ def test_diff_of_two_consecutive_runs(two_runs):
            "error/tolerance grown >10x" in second.stdout
     assert "Since the previous run" in (out / "r.md").read_text()
     page = (root / runs[1] / "index.html").read_text()
-    assert "<section id='diff'>" in page and runs[0] in page
+    assert '<section id="diff">' in page and runs[0] in page
     for check in data["checks"]:            # every gated check has its ratio, information none
         ratio = check["error_over_tolerance"]
         assert (ratio is None) == (check["status"] == "info"), check["name"]

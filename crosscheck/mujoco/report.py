@@ -1,13 +1,14 @@
-"""CSV and self-contained HTML page (with plots) of the MuJoCo crosscheck."""
-import html
-
+"""Rows, plots (PNG files beside the page, each stored once) and the HTML page of the
+MuJoCo crosscheck (crosscheck/reports/templates/engine.html.j2)."""
 import numpy as np
 from matplotlib.figure import Figure
 
+from gpme_core.atomic import atomic_save_figure
+
 from ..compare import FAIL, INFO, row_status
-from ..reports.tables import (atomic_write_bytes, atomic_write_text, figure_data_uri,
-                              html_page, html_table, summarise, worst_first)
+from ..reports.html import engine_page, section, table
 from ..reports.rows import write_rows
+from ..reports.tables import atomic_write_text, summarise, worst_first
 
 TINY = 1e-18   # floor for log plots of differences
 MAX_PLOTTED = 5
@@ -41,8 +42,7 @@ def _trajectory_figure(title, model, g, mj):
     axes[0, 0].legend()
     fig.suptitle(title)
     fig.tight_layout()
-    uri = figure_data_uri(fig)
-    return uri
+    return fig
 
 
 def _off_manifold_figure(model, g, variants, dependent, constraint_names):
@@ -65,17 +65,7 @@ def _off_manifold_figure(model, g, variants, dependent, constraint_names):
     axes[0].legend(fontsize=7)
     fig.suptitle(f"{model.name}: off-manifold start")
     fig.tight_layout()
-    return figure_data_uri(fig)
-
-
-def _img(uri, alt="plot"):
-    return f"<p><img src='{uri}' alt='{html.escape(alt)}'></p>"
-
-
-def _save_png(uri, path):
-    """Also keep a plot as a PNG beside the page (the verify index embeds these)."""
-    import base64
-    atomic_write_bytes(path, base64.b64decode(uri.split(",", 1)[1]))
+    return fig
 
 
 SECTION_TEXT = {
@@ -87,8 +77,23 @@ SECTION_TEXT = {
 }
 
 
+OFF_MANIFOLD_TEXT = (
+    "gpme pulls the state onto the constraints with Baumgarte; MuJoCo with its own "
+    "soft-constraint reference acceleration. With timeconst = dt it snaps onto them within a "
+    "few milliseconds; with timeconst = 1/alpha its reference acceleration equals "
+    "Baumgarte's, but it lacks the Jdot q_dot term, so its violation does not settle to zero.")
+WORST_ROWS = 40
+ROW_COLUMNS = ("section", "case", "model", "coordinate", "metric", "quantity", "entry", "reason")
+
+
+def plot_name(section, model_name):
+    """File name of the plot of one run section of one model (beside mujoco.html)."""
+    return f"mujoco_{section}_{model_name}.png"
+
+
 def write_report(out_dir, df, convergence, plots, quick, scenario_names):
-    """Write out_dir/mujoco.csv and out_dir/mujoco.html atomically.
+    """Write the rows (crosscheck.reports.rows), one PNG per plotted run and
+    out_dir/mujoco.html, each atomically.
 
     df: the tidy table; convergence: one row per (scenario, mechanism setting); plots:
     {(section, model name): (model, gpme DataFrame, MuJoCo DataFrame or {label: DataFrame})};
@@ -97,42 +102,42 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
     st = row_status(df)
     n_fail, n_info = int((st == FAIL).sum()), int((st == INFO).sum())
     ok = n_fail == 0
-    parts = [f"<h1>gpme against MuJoCo {html.escape(_mujoco_version())}</h1>",
-             f"<p>{'quick (CI) run' if quick else 'full run'} of "
-             f"{html.escape(', '.join(scenario_names))}. Overall: <b>{'PASS' if ok else 'FAIL'}</b> "
-             f"({n_fail} failing, {n_info} information rows, of {len(df)}). Method and gates: "
-             "docs/crosscheck-mujoco.md; mechanism: docs/mjcf.md.</p>",
-             "<h2>Summary</h2>",
-             html_table(summarise(df, keys=("section", "model", "quantity")),
-                        left_columns=("section", "model", "quantity", "worst_case", "reason"))]
+    intro = [f"{'quick (CI) run' if quick else 'full run'} of {', '.join(scenario_names)}. "
+             f"Overall: {'PASS' if ok else 'FAIL'} ({n_fail} failing, {n_info} information "
+             f"rows, of {len(df)}). Method and gates: docs/crosscheck-mujoco.md; mechanism: "
+             "docs/mjcf.md."]
+    sections = [section("Summary", table=table(
+        summarise(df, keys=("section", "model", "quantity")),
+        left_columns=("section", "model", "quantity", "worst_case", "reason")))]
     if len(convergence):
-        parts.append("<h2>Soft-equality mechanism: difference to gpme (at dt/4) as timeconst "
-                     "and dt shrink</h2>")
-        parts.append(html_table(convergence, status_column="-", left_columns=("model",)))
-    for (section, name), (model, g, mj) in plots.items():
-        if section == "off-manifold":
-            parts.append(f"<h2>Off-manifold start: {html.escape(name)} (information)</h2>")
-            parts.append("<p>gpme pulls the state onto the constraints with Baumgarte; MuJoCo "
-                         "with its own soft-constraint reference acceleration. With timeconst = "
-                         "dt it snaps onto them within a few milliseconds; with timeconst = "
-                         "1/alpha its reference acceleration equals Baumgarte's, but it lacks "
-                         "the Jdot q_dot term, so its violation does not settle to zero.</p>")
+        sections.append(section("Soft-equality mechanism: difference to gpme (at dt/4) as "
+                                "timeconst and dt shrink",
+                                table=table(convergence, status_column="-",
+                                            left_columns=("model",))))
+    for (kind, name), (model, g, mj) in plots.items():
+        path = plot_name(kind, name)
+        if kind == "off-manifold":
             dependent = list(g.attrs.get("dependent", []))
             cons = [c for c in g.columns if c.startswith("Phi") and not c.endswith("_dot")]
-            off = _off_manifold_figure(model, g, mj, dependent, cons)
-            parts.append(_img(off, f"off-manifold start {name}"))
-            _save_png(off, out_dir / f"mujoco_off-manifold_{name}.png")
+            atomic_save_figure(_off_manifold_figure(model, g, mj, dependent, cons),
+                               out_dir / path)
+            sections.append(section(f"Off-manifold start: {name} (information)",
+                                    [OFF_MANIFOLD_TEXT],
+                                    figures=[(path, f"off-manifold start {name}")]))
             continue
-        title = f"{section}: {name}"
-        parts.append(f"<h2>{html.escape(title)}</h2><p>{html.escape(SECTION_TEXT.get(section, ''))}</p>")
-        traj = _trajectory_figure(title, model, g, mj)
-        parts.append(_img(traj, f"{title}: both trajectories and their difference"))
-        _save_png(traj, out_dir / f"mujoco_{section}_{name}.png")
-    parts.append("<h2>All rows, worst first</h2>")
-    parts.append(html_table(worst_first(df), left_columns=("section", "case", "model",
-                                                           "coordinate", "metric", "quantity",
-                                                           "entry", "reason")))
-    atomic_write_text(out_dir / "mujoco.html", html_page("gpme vs MuJoCo", "".join(parts)))
+        title = f"{kind}: {name}"
+        atomic_save_figure(_trajectory_figure(title, model, g, mj), out_dir / path)
+        sections.append(section(title, [SECTION_TEXT.get(kind, "")], figures=[
+            (path, f"{title}: both trajectories and their difference")]))
+    sections.append(section(
+        f"Worst {min(WORST_ROWS, len(df))} of {len(df)} rows", [
+            "Every row of every check: the checks/mujoco/ files of this report (one gzip CSV "
+            "per check), or all at once with python -m crosscheck.reports.rows <report dir> "
+            "mujoco."],
+        table=table(worst_first(df), max_rows=WORST_ROWS,
+                    left_columns=[c for c in ROW_COLUMNS if c in df.columns])))
+    atomic_write_text(out_dir / "mujoco.html", engine_page(
+        "gpme vs MuJoCo", f"gpme against MuJoCo {_mujoco_version()}", ok, intro, sections))
 
 
 def _mujoco_version():

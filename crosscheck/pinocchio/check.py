@@ -34,7 +34,6 @@ Sign conventions: gpme M q_ddot = h + Q + A^T lambda with Q = -(g + d + f) + t; 
 M a + b(q, v) = tau + J^T lambda_c with b = rnea(q, v, 0) = C v + g_pin and J a + gamma = 0.
 Hence g_pin = g, h = -(b - g_pin), tau = Q + g, and the multipliers agree with the same sign.
 """
-import html
 import logging
 import time
 import zlib
@@ -576,42 +575,45 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     return df
 
 
+CONVENTIONS = (
+    "Conventions: gpme M q̈ = h + Q + Aᵀλ, Q = -(g + d + f) + t; Pinocchio M a + b = τ + "
+    "Jᵀλ_c, J a + γ = 0. Compared: g with computeGeneralizedGravity, h with -(rnea(q, v, 0) "
+    "- g), τ = -K(q - q_ref) - D v + t, γ = κ + 2αΦ̇ + β²Φ; the constraint terms on the "
+    "Pinocchio side come from SymPy derivatives of the task expressions at Pinocchio's frame "
+    "states. Errors are normwise: abs = max|x - y|, rel = abs / max|y|; pass when abs ≤ "
+    "tol_abs + tol_rel max|y|; info rows have no finite tolerance and are never counted as "
+    "passes.")
+WORST_ROWS = 40
+
+
 def _html(df, records, skipped, wall, quick):
-    esc = html.escape
+    """pinocchio.html (crosscheck/reports/templates/engine.html.j2)."""
+    from ..reports.html import engine_page, section, table
     if df.empty:
-        return report.html_page("gpme vs Pinocchio", "<h1>gpme vs Pinocchio: nothing compared</h1>")
+        return engine_page("gpme vs Pinocchio", "gpme vs Pinocchio: nothing compared", False,
+                           [], [])
     summary = report.summarise(df, keys=("section", "model", "quantity"))
     n_fail = int((summary["status"] == "fail").sum())
     status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
     crba = ("pin.crba returned the whole symmetric matrix" if all(r.crba_whole for r in records)
             else "pin.crba filled only the upper triangle for some models; it was mirrored "
                  "before comparing")
-    case_rows = "".join(
-        f"<tr><td class='l'>{esc(r.label)}</td><td class='l'>{esc(r.kind)}</td>"
-        f"<td>{r.n}</td><td>{r.nq_pin}</td><td>{r.n_states}</td>"
-        f"<td class='l'>{'<br>'.join(esc(x) for x in r.notes)}</td></tr>" for r in records)
-    cases = ("<table><thead><tr><th class='l'>model case</th><th class='l'>kind</th>"
-             "<th>n (gpme)</th><th>nq (Pinocchio)</th><th>states</th><th class='l'>"
-             "Pinocchio side</th></tr></thead><tbody>" + case_rows + "</tbody></table>")
-    skipped_html = "".join(f"<li>{esc(s)}</li>" for s in skipped)
-    body = (
-        f"<h1>gpme vs Pinocchio {esc(pin.__version__)}: {esc(status)}</h1>"
-        f"<p>{len(df)} comparisons over {len(records)} model cases; "
-        f"{'quick' if quick else 'full'} run, {wall:.1f} s. {esc(crba)}.</p>"
-        "<h2>Model cases</h2>" + cases
-        + (f"<ul>{skipped_html}</ul>" if skipped_html else "")
-        + "<p>Conventions: gpme M q&#776; = h + Q + A<sup>T</sup>&lambda;, Q = -(g + d + f) + t; "
-        "Pinocchio M a + b = &tau; + J<sup>T</sup>&lambda;<sub>c</sub>, J a + &gamma; = 0. "
-        "Compared: g with computeGeneralizedGravity, h with -(rnea(q, v, 0) - g), "
-        "&tau; = -K(q - q<sub>ref</sub>) - D v + t, &gamma; = &kappa; + 2&alpha;&Phi;&#775; + "
-        "&beta;<sup>2</sup>&Phi;; the constraint terms on the Pinocchio side come from SymPy "
-        "derivatives of the task expressions at Pinocchio's frame states. Errors are "
-        "normwise: abs = max|x - y|, rel = abs / max|y|; pass when abs &le; tol_abs + tol_rel "
-        "max|y|; info rows have no finite tolerance and are never counted as passes.</p>"
-        "<h2>Worst cases</h2>"
-        + report.html_table(report.worst_first(df).head(40), left_columns=(
-            "section", "model", "quantity", "case", "entry", "reason"))
-        + "<h2>Summary per model and quantity</h2>"
-        + report.html_table(summary, left_columns=("section", "model", "quantity", "worst_case",
-                                                   "worst_entry", "reason")))
-    return report.html_page("gpme vs Pinocchio", body)
+    cases = pd.DataFrame([{"model case": r.label, "kind": r.kind, "n (gpme)": r.n,
+                           "nq (Pinocchio)": r.nq_pin, "states": r.n_states,
+                           "Pinocchio side": "; ".join(r.notes)} for r in records])
+    intro = [f"{len(df)} comparisons over {len(records)} model cases; "
+             f"{'quick' if quick else 'full'} run, {wall:.1f} s. {crba}."]
+    sections = [
+        section("Model cases", items=skipped, table=table(
+            cases, status_column="-", left_columns=("model case", "kind", "Pinocchio side"))),
+        section("Conventions", [CONVENTIONS]),
+        section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
+            "Every row: the checks/pinocchio/ files of this report (one gzip CSV per check), "
+            "or all at once with python -m crosscheck.reports.rows <report dir> pinocchio."],
+            table=table(report.worst_first(df), max_rows=WORST_ROWS, left_columns=(
+                "section", "model", "quantity", "case", "entry", "reason"))),
+        section("Summary per model and quantity", table=table(
+            summary, left_columns=("section", "model", "quantity", "worst_case",
+                                   "worst_entry", "reason")))]
+    return engine_page("gpme vs Pinocchio", f"gpme vs Pinocchio {pin.__version__}: {status}",
+                       n_fail == 0, intro, sections)

@@ -82,3 +82,19 @@ def render_table(tab, table_id=None):
     """The HTML of one :class:`Table` (the ``table`` macro alone)."""
     macro = environment().get_template("macros.html.j2").module.table
     return str(macro(tab, table_id))
+
+
+def section(title, text=(), table=None, figures=(), items=(), id=None):
+    """One section of an engine page: paragraphs ``text`` (plain text), an optional
+    :class:`Table`, figures [(src, caption)] (paths relative to the page) and list
+    ``items``."""
+    return {"title": title, "text": list(text), "table": table, "id": id,
+            "figures": [{"src": str(src), "caption": caption} for src, caption in figures],
+            "items": list(items)}
+
+
+def engine_page(title, heading, ok, intro, sections):
+    """The HTML of an engine's own page (templates/engine.html.j2): a verdict header with
+    paragraphs ``intro`` and the ``sections`` (:func:`section`)."""
+    return render("engine.html.j2", title=title, heading=heading, ok=ok, intro=list(intro),
+                  sections=list(sections))

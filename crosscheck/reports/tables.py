@@ -1,13 +1,9 @@
-"""Atomic writing of CSV/HTML/PNG report files and small HTML building blocks.
+"""Atomic writing of CSV/HTML/PNG report files, and the tables' ordering and summaries.
 
 Every file is written to a temporary file in the same directory and moved into place
 with os.replace, so an interrupted run never leaves a half-written file where a good
-one was.  HTML pages are self-contained (inline CSS, images as data URIs).
+one was.  The HTML itself comes from templates (crosscheck.reports.html).
 """
-import base64
-import html
-import io
-
 import numpy as np
 import pandas as pd
 
@@ -15,69 +11,18 @@ from gpme_core.atomic import atomic_write_bytes, atomic_write_csv, atomic_write_
 
 from ..compare import FAIL, INFO, PASS, STATUSES, row_status
 
-CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:1rem auto;
-max-width:72rem;padding:0 1rem;color:#222;line-height:1.4}
-table{border-collapse:collapse;font-size:.85rem;display:block;overflow-x:auto;max-width:100%}
-th,td{border:1px solid #ccc;padding:.2rem .4rem;text-align:right;white-space:nowrap}
-th{background:#f0f0f0;position:sticky;top:0}td.l,th.l{text-align:left}
-tr.fail td{background:#fdd}tr.pass td.st{color:#060}tr.fail td.st{color:#a00;font-weight:bold}
-tr.info td.st{color:#555;font-style:italic}
-img{max-width:100%;height:auto}code{background:#f4f4f4;padding:0 .2rem}
-"""
-
 
 def write_csv(df, path):
     """Write a DataFrame as CSV atomically (no index column)."""
     atomic_write_csv(df, path)
 
 
-def figure_data_uri(fig, dpi=110):
-    """A matplotlib figure as a PNG data URI (for self-contained HTML)."""
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
-
-
-def _fmt(v):
-    if isinstance(v, float):
-        return f"{v:.3e}" if (v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e5)) else f"{v:.6g}"
-    return html.escape(str(v))
-
-
 def html_table(df, status_column=None, max_rows=None, left_columns=()):
-    """An HTML table of ``df``; each row gets the class of its status ('pass', 'fail',
-    'info').  status_column: "status" (pass/fail/info strings) or "passed" (booleans);
-    default: "status" when the table has it, else "passed"; a name the table lacks
-    (e.g. "-") colours nothing."""
-    if max_rows is not None:
-        df = df.head(max_rows)
-    if status_column is None:
-        status_column = "status" if "status" in df.columns else "passed"
-    head = "".join(f"<th class='l'>{html.escape(str(c))}</th>" if c in left_columns
-                   else f"<th>{html.escape(str(c))}</th>" for c in df.columns)
-    statuses = row_status(df) if status_column in df.columns else [None] * len(df)
-    rows = []
-    for (_, r), st in zip(df.iterrows(), statuses):
-        cls = f" class='{st}'" if st else ""
-        cells = []
-        for c in df.columns:
-            v = r[c]
-            if c == status_column:
-                cells.append(f"<td class='st'>{'FAIL' if st == FAIL else st}</td>")
-            else:
-                cl = " class='l'" if c in left_columns else ""
-                cells.append(f"<td{cl}>{_fmt(v)}</td>")
-        rows.append(f"<tr{cls}>{''.join(cells)}</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
-
-
-def html_page(title, body_html):
-    """A complete self-contained HTML document."""
-    return (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
-            f"<meta name='viewport' content='width=device-width,initial-scale=1'>"
-            f"<title>{html.escape(title)}</title><style>{CSS}</style></head>"
-            f"<body>{body_html}</body></html>")
+    """The HTML of a table of ``df`` (crosscheck.reports.html.table, rendered by the
+    templates' ``table`` macro); each row gets the class of its status ('pass', 'fail',
+    'info')."""
+    from .html import render_table, table
+    return render_table(table(df, status_column, max_rows, left_columns))
 
 
 def worst_first(df):
