@@ -28,6 +28,7 @@ COLUMNS = ("engine", "model", "quantity", "case", "entry", "gpme_value", "engine
            "abs_error", "rel_error", "scale", "tol_abs", "tol_rel", "status", "passed", "reason")
 FAIL, PASS, INFO = "fail", "pass", "info"
 STATUSES = (FAIL, PASS, INFO)          # worst first
+CRASH_QUANTITY = "step crashed"        # the quantity of the one row of a step that crashed
 
 
 @dataclass(frozen=True)

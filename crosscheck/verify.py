@@ -32,9 +32,10 @@ import pandas as pd
 
 from gpme.out_lock import exclusive_output, output_file_problem
 
+from .compare import CRASH_QUANTITY
 from .reports import run_diff
 from .reports.index_page import write_index
-from .reports.rows import normalise, write_rows
+from .reports.rows import check_name, normalise, write_rows
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
@@ -50,7 +51,6 @@ OWNER_FILE = ".owner.json"
 # s: a staging directory without a readable owner (or from another host) older than this is
 # taken as dead
 STALE_AFTER_S = 2 * 86400.0
-CRASH_QUANTITY = "step crashed"    # the quantity of a crashed step's one row
 
 
 def _say(msg):
@@ -81,7 +81,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
                                     max_wall_s=max_wall_s)
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
         rows += run_rows(crane_scenario(n), runs[case])
-    paper.write_outputs(runs, run_dir / "paper")
+    paper.write_outputs(runs, run_dir / "paper", compressed=True)
     df = rows_frame(rows)
     write_rows(df, run_dir, "gpme")
     return df, runs
@@ -97,7 +97,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
         df = simulate_scenario(scenario, quick=quick, progress=progress,
                                max_wall_s=max_wall_s)
         _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
-        write_run_outputs(scenario, df, run_dir / "runs")
+        write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
         rows += run_rows(scenario, df)
     df = rows_frame(rows)
     write_rows(df, run_dir, "gpme")
@@ -321,13 +321,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
     # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
     rows = normalise(pd.concat(tables.values(), ignore_index=True))
-    keys = ["engine", "section", "model", "quantity"]
-    summary = summarise(rows, keys=keys)
-    summary.insert(0, "check", [f"{r.engine}/{r.section}/{r.model}/{r.quantity}"
-                                for r in summary.itertuples()])
-    # each check's error / tolerance of its worst row (the measure of the diff)
-    summary = summary.merge(run_diff.check_ratios(rows, keys=keys), on=keys, how="left",
-                            validate="one_to_one")
+    summary = summary_of(rows)
     warnings = run_warnings(rows.to_dict("records")) if "reason" in rows.columns else []
     for warning in warnings:
         _say(f"WARNING {warning}")
@@ -350,6 +344,18 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         final, run_id = _publish(root, staging, run_id)
         _point_latest(root, run_id)
     return final, summary, rows
+
+
+def summary_of(rows):
+    """One row per check (engine, section, model, quantity) of the normalised comparison
+    rows: crosscheck.reports.tables.summarise plus ``check`` (its name) and
+    ``error_over_tolerance`` / ``tolerance`` of its worst row (the measure of the diff)."""
+    keys = ["engine", "section", "model", "quantity"]
+    summary = summarise(rows, keys=keys)
+    summary.insert(0, "check", [check_name(r.engine, r.section, r.model, r.quantity)
+                                for r in summary.itertuples()])
+    return summary.merge(run_diff.check_ratios(rows, keys=keys), on=keys, how="left",
+                         validate="one_to_one")
 
 
 def _check_record(r):

@@ -30,15 +30,19 @@ def report(tmp_path_factory):
 def test_run_directory_and_latest(report):
     root, run_dir, summary, _ = report
     assert (root / "latest").resolve() == run_dir.resolve()
-    for name in ("index.html", "summary.json", "summary.csv", "gpme.csv", "models.json",
-                 "paper/rigid.csv", "paper/flexible.csv", "paper/fig2_joint_coordinates.png"):
+    for name in ("index.html", "summary.json", "summary.csv", "checks/index.csv",
+                 "tolerances.csv.gz", "checks/gpme/columns.csv", "models.json",
+                 "paper/rigid.csv.gz", "paper/flexible.csv.gz",
+                 "paper/fig2_joint_coordinates.png"):
         assert (run_dir / name).is_file(), name
     data = json.loads((run_dir / "summary.json").read_text())
     assert len(data["checks"]) == len(summary)
     assert {"name", "engine", "model", "quantity", "worst_abs_error", "tol_abs", "tol_rel",
             "status"} <= set(data["checks"][0])
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]
-    back = pd.read_csv(run_dir / "gpme.csv")
+    from crosscheck.reports.rows import read_rows
+    back = read_rows(run_dir, "gpme")
+    assert pd.read_csv(run_dir / "paper" / "rigid.csv.gz")["t"].iloc[-1] == verify.QUICK_T_END
     assert set(back["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
                                      "energy balance",
                                      "smallest singular value of the constraint Jacobian",
@@ -294,8 +298,13 @@ def test_page_in_headless_chromium(report):
         images = browser.execute_script(
             "return Array.from(document.images).map(i => [i.complete, i.naturalWidth, i.alt])")
         assert len(images) >= 3 and all(ok and w > 0 for ok, w, _ in images), images
-        rows = browser.execute_script("return document.querySelectorAll('#summary tbody tr').length")
+        rows = browser.execute_script(
+            "return document.querySelectorAll('table.checks tbody tr').length")
         assert rows == len(summary)
+        assert browser.execute_script("return document.querySelectorAll('table.matrix td.c a')"
+                                      ".length") >= 1
+        assert browser.execute_script(
+            "return document.documentElement.scrollWidth - window.innerWidth") <= 0
         browser.save_screenshot(str(SCREENSHOTS / "index-laptop.png"))
         # readable on a phone: the page itself does not scroll sideways (wide tables scroll
         # inside their own box)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from markupsafe import Markup
 
-from ..compare import FAIL, INFO, PASS
+from ..compare import CRASH_QUANTITY, FAIL, INFO, PASS
 from .check_plots import write_spread_plots
 from .html import render, table as html_table_data
 from .matrix import legend, matrix_blocks
@@ -66,6 +66,14 @@ def diff_section(diff):
                          definition=diff.get("definition", "")))
 
 
+def _failure(r):
+    """What went wrong in a failed check (a summary row as a dict), in one line."""
+    if r["quantity"] == CRASH_QUANTITY:
+        return f"the step crashed: {r['reason']}"
+    return (f"error {_fmt(r['worst_abs_error'])} > tolerance {_fmt(r['tolerance'])} "
+            f"(x{_fmt(r['error_over_tolerance'])}), at {r['worst_case']} {r['worst_entry']}")
+
+
 def _status_counts(summary):
     return {st: int((summary["status"] == st).sum()) for st in (FAIL, PASS, INFO)}
 
@@ -75,17 +83,14 @@ def _verdict(summary, rows, meta, diff):
     counts = _status_counts(summary)
     ok = counts[FAIL] == 0
     failing = summary[summary["status"] == FAIL]
-    listed = [{"id": check_id(r["check"]), "name": r["check"],
-               "detail": (f"error {_fmt(r['worst_abs_error'])} > tolerance "
-                          f"{_fmt(r['tolerance'])} (x{_fmt(r['error_over_tolerance'])}), "
-                          f"at {r['worst_case']} {r['worst_entry']}")}
+    listed = [{"id": check_id(r["check"]), "name": r["check"], "detail": _failure(r)}
               for r in failing.head(MAX_FAILING_LISTED).to_dict("records")]
     engines = []
     for engine, g in summary.groupby("engine", sort=False):
         version = meta.get("versions", {}).get(ENGINE_VERSION_KEYS.get(engine, engine), "")
         n_fail = int((g["status"] == FAIL).sum())
         engines.append({"engine": engine, "n_fail": n_fail,
-                        "text": f"{engine} {version}: {len(g)} checks, "
+                        "text": f"{engine} {version}".strip() + f": {len(g)} checks, "
                                 + (f"{n_fail} FAILED" if n_fail else "none failed")})
     if diff and diff.get("previous") is not None:
         changes = headline(diff).split(": ", 1)[-1]

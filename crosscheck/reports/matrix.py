@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..compare import FAIL, INFO
+from ..compare import CRASH_QUANTITY, FAIL, INFO
 from .rows import check_id
 
 # log10(error / tolerance) from GREEN_AT (far inside the tolerance) to 0 (at the
@@ -95,7 +95,7 @@ def _cell(group):
     ratio = worst["error_over_tolerance"]
     ratio = None if ratio is None or (isinstance(ratio, float) and ratio != ratio) else ratio
     status = worst["status"]
-    crashed = worst["quantity"] == "step crashed"
+    crashed = worst["quantity"] == CRASH_QUANTITY
     lines = [worst["check"],
              f"worst |error| {worst['worst_abs_error']:.3g}, tolerance "
              f"{worst['tolerance']:.3g}" if ratio is not None else "information only: no tolerance",
