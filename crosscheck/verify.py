@@ -33,7 +33,7 @@ import pandas as pd
 from gpme.out_lock import exclusive_output, output_file_problem
 
 from .compare import CRASH_QUANTITY
-from .reports import run_diff
+from .reports import run_diff, strict_json
 from .reports.index_page import write_index
 from .reports.rows import check_name, normalise, write_rows
 from .reports.tables import atomic_write_text, summarise, write_csv
@@ -336,7 +336,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         "checks": [_check_record(r) for r in summary.to_dict("records")]}
     previous_doc, source, note = previous
     document["diff"] = run_diff.diff_summaries(previous_doc, document, source=source, note=note)
-    atomic_write_text(staging / "summary.json", json.dumps(document, indent=1))
+    atomic_write_text(staging / "summary.json", strict_json.dumps(document))
     write_index(staging, summary, rows, runs, meta, record, diff=document["diff"],
                 names=_model_names(scenarios, quick, only))
     (staging / OWNER_FILE).unlink()
@@ -520,7 +520,7 @@ def main(args, problems=()):
         print(summary.assign(status=status)[cols].to_string(index=False))
     n_fail = int(_failed(summary).sum())
     n_pass, n_info = int((status == "pass").sum()), int((status == "info").sum())
-    document = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
+    document = strict_json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
     for path in write_ci_outputs(run_dir, document, getattr(args, "junit_xml", None),
                                  getattr(args, "summary_md", None)):
         print(f"wrote {path}")

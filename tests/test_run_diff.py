@@ -177,3 +177,19 @@ def test_ratios_written_as_json_read_back():
                 for q, v in zip(r["quantity"], r["error_over_tolerance"])])
     back = json.loads(json.dumps(doc))
     assert run_diff._ratio(back["checks"][0]) == INF and run_diff._ratio(back["checks"][1]) is None
+
+
+def test_summary_json_is_strict_json_and_reads_back():
+    """No NaN/Infinity tokens (jq and JSON.parse refuse them); inf comes back as a float."""
+    import json
+    import math
+    from crosscheck.reports import strict_json
+    doc = {"checks": [{"name": "inf", "reason": "inf", "error_over_tolerance": math.inf,
+                       "worst_abs_error": float("nan"), "tol_abs": -math.inf,
+                       "tolerance": 1e-9}]}
+    text = strict_json.dumps(doc)
+    json.loads(text, parse_constant=lambda c: pytest.fail(f"non-strict token {c}"))
+    back = strict_json.loads(text)["checks"][0]
+    assert back["error_over_tolerance"] == math.inf and back["tol_abs"] == -math.inf
+    assert back["worst_abs_error"] is None and back["tolerance"] == 1e-9
+    assert back["name"] == "inf" and back["reason"] == "inf"    # text fields stay text

@@ -30,13 +30,14 @@ unreadable previous report gives a diff with ``previous`` None and a one-line ``
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
 import numpy as np
 import pandas as pd
+
+from . import strict_json
 
 GROWTH_FACTOR = 10.0
 RATIO_FLOOR = 1e-6
@@ -94,7 +95,7 @@ def load_previous(path: Path | str) -> tuple[Optional[dict], Optional[str]]:
     path = Path(path)
     file = path / SUMMARY_FILE if path.is_dir() else path
     try:
-        data = json.loads(file.read_text(encoding="utf-8"))
+        data = strict_json.loads(file.read_text(encoding="utf-8"))
     except FileNotFoundError:
         return None, f"previous report {path} has no {SUMMARY_FILE}: nothing to compare with"
     except (OSError, UnicodeDecodeError) as exc:
