@@ -139,8 +139,8 @@ def summary_markdown(summary: Mapping[str, Any], index_path: str = "index.html")
     versions = run.get("versions") or {}
     lines += ["", "Versions: " + ", ".join(f"{md_escape(k)} {md_escape(v)}"
                                             for k, v in versions.items()) + ".",
-              "", f"Report: `{index_path}` (summary.json, summary.csv and each engine's CSV "
-                  "beside it)."]
+              "", f"Report: `{index_path}` (summary.json, summary.csv and each check's "
+                  "comparison rows in checks/ beside it)."]
     return "\n".join(lines) + "\n"
 
 
