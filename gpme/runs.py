@@ -4,7 +4,8 @@ import json
 import re
 from pathlib import Path
 
-from gpme_core.atomic import atomic_save_figure, atomic_write_csv, atomic_write_text
+from gpme_core.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
+                              atomic_write_text)
 from gpme_core.errors import ModelError
 from gpme_core.integrate import METHODS, simulate, suggest_rk4_step
 
@@ -60,13 +61,16 @@ def events_json(df):
                        "events": list(df.attrs.get("events", []))}, indent=2) + "\n"
 
 
-def write_run_outputs(scenario, df, out_dir):
+def write_run_outputs(scenario, df, out_dir, compressed=False):
     """<out_dir>/<name>.csv and <name>_<figure>.png for one run, and <name>_events.json
-    when the run switched its dependent coordinates; returns {label: path}."""
+    when the run switched its dependent coordinates; returns {label: path}.  With
+    ``compressed`` (verify's report) the history is <name>.csv.gz with
+    gpme_core.atomic.HISTORY_DIGITS significant digits instead of full precision."""
     out = Path(out_dir)
     stem = slug(scenario.name)
-    paths = {f"{stem}.csv": out / f"{stem}.csv"}
-    atomic_write_csv(df, paths[f"{stem}.csv"])
+    history = f"{stem}.csv.gz" if compressed else f"{stem}.csv"
+    paths = {history: out / history}
+    atomic_write_csv(df, paths[history], HISTORY_DIGITS if compressed else None)
     if df.attrs.get("events"):
         paths[f"{stem}_events.json"] = out / f"{stem}_events.json"
         atomic_write_text(paths[f"{stem}_events.json"], events_json(df))

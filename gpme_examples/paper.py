@@ -4,7 +4,7 @@ import time
 from pathlib import Path
 
 from . import figures
-from gpme_core.atomic import atomic_save_figure, atomic_write_csv
+from gpme_core.atomic import HISTORY_DIGITS, atomic_save_figure, atomic_write_csv
 from .crane import CraneParameters, build_crane, crane_system, initial_state
 from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate
@@ -39,13 +39,16 @@ def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_ma
     return df
 
 
-def write_outputs(runs, out_dir, params=CraneParameters()):
-    """CSV per case and the PNG figures into out_dir; returns {name: path}."""
+def write_outputs(runs, out_dir, params=CraneParameters(), compressed=False):
+    """The history of each case and the PNG figures into out_dir; returns {name: path}.
+    Histories: <case>.csv in full precision, or with ``compressed`` (verify's report)
+    <case>.csv.gz with gpme_core.atomic.HISTORY_DIGITS significant digits."""
     out = Path(out_dir)
     paths = {}
     for case, df in runs.items():
-        paths[f"{case}.csv"] = out / f"{case}.csv"
-        atomic_write_csv(df, paths[f"{case}.csv"])
+        name = f"{case}.csv.gz" if compressed else f"{case}.csv"
+        paths[name] = out / name
+        atomic_write_csv(df, paths[name], HISTORY_DIGITS if compressed else None)
     figs = {"fig2_joint_coordinates.png": figures.joint_coordinates(runs),
             "fig3_end_effector.png": figures.end_effector(runs, params),
             "constraint_violation.png": figures.constraint_violation(runs)}

@@ -33,8 +33,9 @@ def test_readme_command_passes(tmp_path, monkeypatch):
                        "--model", "examples/my_arm/my_arm.toml"])
     assert status == 0
     run = tmp_path / "latest"
-    for name in ("index.html", "summary.json", "gpme.csv", "pinocchio.csv", "mujoco.csv",
-                 "runs/my_arm.csv"):
+    for name in ("index.html", "summary.json", "checks/index.csv", "tolerances.csv.gz",
+                 "checks/gpme/columns.csv", "checks/pinocchio/columns.csv",
+                 "checks/mujoco/columns.csv", "runs/my_arm.csv.gz"):
         assert (run / name).is_file(), name
 
 

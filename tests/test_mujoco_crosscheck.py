@@ -10,6 +10,7 @@ from crosscheck.mujoco import cases
 from crosscheck.mujoco import check as mujoco_check
 from crosscheck.mujoco import runs as mj_runs
 from crosscheck.mujoco.mjcf import mjcf_text
+from crosscheck.reports.rows import read_rows
 from gpme_io.scenario import crane_scenario
 from test_exact_runs import arm_scenario
 
@@ -30,7 +31,7 @@ def test_quick_run_passes_and_writes_the_report(quick_run):
     assert failing.empty, failing.to_string()
     assert set(df["section"]) == {"terms", "free", "exact", "mechanism", "off-manifold",
                                   "wall time"}
-    csv = pd.read_csv(out / "mujoco.csv")
+    csv = read_rows(out, "mujoco")
     assert len(csv) == len(df)
     assert {"section", "case", "coordinate", "metric", "abs_error", "status", "reason"} <= set(csv)
     page = (out / "mujoco.html").read_text()

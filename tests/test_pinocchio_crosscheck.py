@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from crosscheck.pinocchio import check as pc
 from crosscheck.pinocchio.model import from_gpme
+from crosscheck.reports.rows import read_rows
 from gpme_core.constraints import JointProgramme, SympyPointConstraint
 from gpme_core.errors import ConstraintError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
@@ -121,7 +122,7 @@ def test_quick_run_passes_on_crane_and_small_arm_and_writes_reports(quick_run):
                                 "small_arm (URDF)"}
     assert (df.groupby("model")["case"].nunique() == pc.QUICK.n_random + pc.QUICK.n_run).all()
     assert (df["section"] == "terms").all()
-    csv = pd.read_csv(out / "pinocchio.csv")
+    csv = read_rows(out, "pinocchio")
     assert len(csv) == len(df) and list(csv.columns) == list(df.columns)
     page = (out / "pinocchio.html").read_text()
     assert "all comparisons pass" in page and "Worst cases" in page and "Model cases" in page
