@@ -17,7 +17,7 @@ from ..compare import CRASH_QUANTITY, FAIL, INFO, PASS
 from .check_plots import write_spread_plots
 from .html import render, table as html_table_data
 from .matrix import legend, matrix_blocks
-from .rows import CHECKS_DIR, check_id, slice_path
+from .rows import CHECKS_DIR, TOLERANCES_FILE, check_id, slice_path
 from .tables import atomic_write_text
 
 PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
@@ -34,8 +34,10 @@ FILE_NOTES = {
     "summary.json": "one entry per check, the run's versions, warnings and the diff",
     "summary.csv": "one row per check",
     "models.json": "what each model is made of",
-    "tolerances.csv": "tol_id, tol_abs, tol_rel and reason of the comparison rows",
-    CHECKS_DIR: "the comparison rows, one gzip CSV per check (checks/index.csv lists them)",
+    TOLERANCES_FILE: "tol_id, tol_abs, tol_rel and reason of the comparison rows (gzip CSV)",
+    CHECKS_DIR: ("the comparison rows, one gzip CSV per check (checks/index.csv lists them; "
+                 "all of them as one table: python -m crosscheck.reports.rows <this "
+                 "directory> [engine])"),
     "plots": "spread of each check group's error / tolerance",
     "pinocchio.html": "the Pinocchio crosscheck's own page",
     "mujoco.html": "the MuJoCo crosscheck's own page",
