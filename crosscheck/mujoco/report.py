@@ -6,7 +6,7 @@ from matplotlib.figure import Figure
 from gpme_core.atomic import atomic_save_figure
 
 from ..compare import FAIL, INFO, row_status
-from ..reports.html import engine_page, section, table
+from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
 from ..reports.rows import write_rows
 from ..reports.tables import atomic_write_text, summarise, worst_first
 
@@ -83,7 +83,7 @@ OFF_MANIFOLD_TEXT = (
     "few milliseconds; with timeconst = 1/alpha its reference acceleration equals "
     "Baumgarte's, but it lacks the Jdot q_dot term, so its violation does not settle to zero.")
 WORST_ROWS = 40
-ROW_COLUMNS = ("section", "case", "model", "coordinate", "metric", "quantity", "entry", "reason")
+ROW_COLUMNS = ("section", "case", "model", "coordinate", "metric", "quantity", "entry")
 
 
 def plot_name(section, model_name):
@@ -106,9 +106,12 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
              f"Overall: {'PASS' if ok else 'FAIL'} ({n_fail} failing, {n_info} information "
              f"rows, of {len(df)}). Method and gates: docs/crosscheck-mujoco.md; mechanism: "
              "docs/mjcf.md."]
-    sections = [section("Summary", table=table(
-        summarise(df, keys=("section", "model", "quantity")),
-        left_columns=("section", "model", "quantity", "worst_case", "reason")))]
+    summary = summarise(df, keys=("section", "model", "quantity"))
+    worst = worst_first(df).head(WORST_ROWS)
+    reasons, reason_table = reason_refs(summary, worst)
+    sections = [section("Summary", table=table(cite_reasons(summary, reasons),
+                                               left_columns=("section", "model", "quantity",
+                                                             "worst_case")))]
     if len(convergence):
         sections.append(section("Soft-equality mechanism: difference to gpme (at dt/4) as "
                                 "timeconst and dt shrink",
@@ -134,8 +137,10 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
             "Every row of every check: the checks/mujoco/ files of this report (one gzip CSV "
             "per check), or all at once with python -m crosscheck.reports.rows <report dir> "
             "mujoco."],
-        table=table(worst_first(df), max_rows=WORST_ROWS,
+        table=table(cite_reasons(worst, reasons),
                     left_columns=[c for c in ROW_COLUMNS if c in df.columns])))
+    sections.append(section("Why each tolerance is what it is (the reason column's ids)",
+                            table=reason_table))
     atomic_write_text(out_dir / "mujoco.html", engine_page(
         "gpme vs MuJoCo", f"gpme against MuJoCo {_mujoco_version()}", ok, intro, sections))
 

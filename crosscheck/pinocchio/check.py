@@ -588,11 +588,13 @@ WORST_ROWS = 40
 
 def _html(df, records, skipped, wall, quick):
     """pinocchio.html (crosscheck/reports/templates/engine.html.j2)."""
-    from ..reports.html import engine_page, section, table
+    from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
     if df.empty:
         return engine_page("gpme vs Pinocchio", "gpme vs Pinocchio: nothing compared", False,
                            [], [])
     summary = report.summarise(df, keys=("section", "model", "quantity"))
+    worst = report.worst_first(df).head(WORST_ROWS)
+    reasons, reason_table = reason_refs(worst, summary)
     n_fail = int((summary["status"] == "fail").sum())
     status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
     crba = ("pin.crba returned the whole symmetric matrix" if all(r.crba_whole for r in records)
@@ -610,10 +612,12 @@ def _html(df, records, skipped, wall, quick):
         section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
             "Every row: the checks/pinocchio/ files of this report (one gzip CSV per check), "
             "or all at once with python -m crosscheck.reports.rows <report dir> pinocchio."],
-            table=table(report.worst_first(df), max_rows=WORST_ROWS, left_columns=(
-                "section", "model", "quantity", "case", "entry", "reason"))),
+            table=table(cite_reasons(worst, reasons), left_columns=(
+                "section", "model", "quantity", "case", "entry"))),
         section("Summary per model and quantity", table=table(
-            summary, left_columns=("section", "model", "quantity", "worst_case",
-                                   "worst_entry", "reason")))]
+            cite_reasons(summary, reasons), left_columns=("section", "model", "quantity",
+                                                          "worst_case", "worst_entry"))),
+        section("Why each tolerance is what it is (the reason column's ids)",
+                table=reason_table)]
     return engine_page("gpme vs Pinocchio", f"gpme vs Pinocchio {pin.__version__}: {status}",
                        n_fail == 0, intro, sections)

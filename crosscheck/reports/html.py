@@ -15,6 +15,7 @@ import numpy as np
 from ..compare import FAIL, row_status
 
 TEMPLATES = Path(__file__).with_name("templates")
+WIDE_COLUMNS = ("reason", "Pinocchio side")   # long text: given room instead of wrapped
 
 
 def number(v):
@@ -36,11 +37,13 @@ def number(v):
 class Table:
     """A table for the ``table`` macro: ``columns`` (names), ``left`` (names of the
     left-aligned text columns), ``rows`` (each: {"status": "pass"|"fail"|"info"|None,
-    "cells": [text, ...]}); the status column's cell shows FAIL in capitals."""
+    "cells": [text, ...]}), ``wide`` (left columns of long text, given a wide minimum);
+    the status column's cell shows FAIL in capitals."""
     columns: list
     left: set = field(default_factory=set)
     rows: list = field(default_factory=list)
     status_column: str = None
+    wide: set = field(default_factory=lambda: set(WIDE_COLUMNS))
 
 
 def table(df, status_column=None, max_rows=None, left_columns=()):
@@ -98,3 +101,23 @@ def engine_page(title, heading, ok, intro, sections):
     paragraphs ``intro`` and the ``sections`` (:func:`section`)."""
     return render("engine.html.j2", title=title, heading=heading, ok=ok, intro=list(intro),
                   sections=list(sections))
+
+
+def reason_refs(*frames):
+    """The reasons of ``frames`` numbered once: ({reason: "R<k>"}, a :class:`Table` of
+    them); replace each frame's reason column with :func:`cite_reasons` so that a long
+    reason is printed once per page, not once per row."""
+    import pandas as pd
+    ids = {}
+    for df in frames:
+        for reason in df.get("reason", pd.Series(dtype=object)).dropna():
+            ids.setdefault(reason, f"R{len(ids) + 1}")
+    side = pd.DataFrame({"id": list(ids.values()), "reason": list(ids.keys())})
+    return ids, table(side, status_column="-", left_columns=("id", "reason"))
+
+
+def cite_reasons(df, ids):
+    """``df`` with its reason column holding the reason's id ("R<k>") of :func:`reason_refs`."""
+    if "reason" not in df.columns:
+        return df
+    return df.assign(reason=df["reason"].map(ids).fillna("-"))
