@@ -33,8 +33,8 @@ def atomic_write_text(path, text):
 # Significant digits of the run histories in a verify report (compressed=True of
 # gpme_examples.paper.write_outputs and gpme.runs.write_run_outputs; `gpme simulate` keeps
 # full precision).  The rounding, at most 5e-14 relative, is below what halving the step
-# changes in every column of the paper's 10 s runs but the three the programme fixes to
-# round-off (end-effector height, column angle, drive work; 2e-15..5e-14): measured
+# changes in every column of the paper's 10 s runs but three that agree to round-off
+# (end-effector height, column angle, drive work; 2e-15..5e-14): measured
 # 5e-15..5e-12 (rigid) and 2e-15..2e-5 (flexible); reports/README.md, "Precision of the run
 # histories".  It makes the full report 9.4 MB instead of 10.1 MB.
 HISTORY_DIGITS = 14

@@ -173,7 +173,7 @@ def test_names_differing_only_in_unsafe_characters_get_different_ids():
 
 def test_odd_engine_and_model_names_round_trip(tmp_path):
     frames = {engine: _rows(engine, seed=k).assign(model=lambda d, e=engine: d["model"] + e)
-              for k, engine in enumerate(["a b", "..", "ψ", "-x", "engine"])}
+              for k, engine in enumerate(["a b", "..", "ψ", "-x", "engine", "index.csv"])}
     for engine, df in frames.items():
         write_rows(df, tmp_path, engine)
     for engine, df in frames.items():

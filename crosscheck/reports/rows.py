@@ -112,7 +112,8 @@ def check_name(engine, section, model, quantity):
 def check_id(name):
     """A file- and URL-safe id of the check ``name``: its readable part (at most MAX_SLUG
     characters of [A-Za-z0-9._-], not starting with '-' or '.') and 8 hex digits of its
-    SHA-1, so two names never share an id even when their readable parts do."""
+    SHA-1, so names that share a readable part still get different ids (a collision of the
+    8 digits, about 1 in 4e9 for a pair, is refused by :func:`write_rows`)."""
     readable = _UNSAFE.sub("-", name).strip("-.")[:MAX_SLUG].rstrip("-.")
     digest = hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
     return f"{readable}-{digest}" if readable else digest
@@ -120,9 +121,9 @@ def check_id(name):
 
 def _engine_dir(engine):
     """The directory name of an engine under checks/: the name itself when it is file-safe
-    (and at most MAX_SLUG long), else check_id(engine)."""
+    (at most MAX_SLUG long, not the index's name), else check_id(engine)."""
     engine = str(engine)
-    if _SAFE_NAME.fullmatch(engine) and len(engine) <= MAX_SLUG:
+    if _SAFE_NAME.fullmatch(engine) and len(engine) <= MAX_SLUG and engine != INDEX_FILE:
         return engine
     return check_id(engine)
 
