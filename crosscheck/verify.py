@@ -2,9 +2,11 @@
 
 Steps: gpme (each scenario's run and its checks; without --model the paper's two crane runs
 with the paper's figures), pinocchio (term by term and exactly realised runs), mujoco
-(terms, free and programmed runs).  Writes reports/<run-id>/ (index.html, gpme.csv,
-pinocchio.csv/.html, mujoco.csv/.html, summary.json, summary.csv, models.json, runs/ or
-paper/ with the run histories and figures) and points reports/latest at it.  The run is
+(terms, free and programmed runs).  Writes reports/<run-id>/ (index.html, summary.json,
+summary.csv, models.json, checks/ with every step's comparison rows and tolerances.csv.gz
+(crosscheck.reports.rows), pinocchio.html, mujoco.html and their plots, plots/, runs/ or
+paper/ with the run histories and figures; reports/README.md) and points reports/latest at
+it.  The run is
 built in a hidden reports/.<run-id>.*.partial directory (removed if the run is
 interrupted) and renamed into place only when complete, under a name no other run has
 taken (two runs started in the same second get <run-id> and <run-id>-2), and `latest` is
@@ -313,6 +315,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                 tables[step] = _engine_step(step, staging, chosen, quick, progress)
         except Exception as exc:  # a crashed step is a failed check, reported in full
             tables[step] = _crash_row(step, exc)
+            write_rows(normalise(tables[step]), staging, step)   # its row, linked by the index
             _report_crash(staging, step, exc)
         timings[step] = time.perf_counter() - t0
         failed = int(_failed(tables[step]).sum())

@@ -97,6 +97,13 @@ def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys, tmp_path)
     md = (tmp_path / "r.md").read_text()
     assert md.startswith("## gpme verify ❌ FAILED: 1 of 1 checks failed")
     assert "| `pinocchio/terms/-/step crashed` |" in md and "step crashed |" in md
+    # the crashed step's row is stored and linked from the index like any check's
+    from crosscheck.reports.rows import read_rows, slice_path
+    crash = slice_path("pinocchio/terms/-/step crashed")
+    assert (root / "latest" / crash).is_file()
+    assert read_rows(root / "latest", "pinocchio")["reason"].tolist() == \
+        ["pinocchio engine unavailable"]
+    assert f'href="{crash}"' in (root / "latest" / "index.html").read_text()
     # the previous run (`latest`) ran the paper step only: its checks vanished, not failed
     data = json.loads((root / "latest" / "summary.json").read_text())
     assert data["diff"]["mode_changed"] == ["--only: gpme before, pinocchio now"]

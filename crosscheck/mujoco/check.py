@@ -233,8 +233,8 @@ def wall_time_rows(plots):
 def run(out_dir: Path, scenarios=None, quick: bool = False,
         progress: bool = False) -> pd.DataFrame:
     """Run every section for every scenario (gpme_io.scenario.Scenario; None: the crane
-    rigid and n = 1 on the constraints), write out_dir/mujoco.csv and mujoco.html
-    atomically and return the tidy table (columns status: pass / fail / info, passed)."""
+    rigid and n = 1 on the constraints), write its rows (crosscheck.reports.rows), plots and
+    out_dir/mujoco.html atomically and return the tidy table (columns status: pass / fail / info, passed)."""
     out_dir = Path(out_dir)
     scenarios = list(default_scenarios() if scenarios is None else scenarios)
     p = cases.plan(quick)
@@ -268,5 +268,5 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
     df = df[front + [c for c in df.columns if c not in front]]
     convergence = pd.concat(tables, ignore_index=True) if tables else pd.DataFrame()
     write_report(out_dir, df, convergence, plots, quick, [s.name for s in scenarios])
-    log(f"written {out_dir / 'mujoco.csv'} and {out_dir / 'mujoco.html'}")
+    log(f"written the rows under {out_dir / 'checks'} and {out_dir / 'mujoco.html'}")
     return df

@@ -513,8 +513,9 @@ class CaseRecord:
 
 def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False,
         progress: bool = False, sections: Sequence[str] = SECTIONS) -> pd.DataFrame:
-    """Compare gpme with Pinocchio for every scenario; write out_dir/pinocchio.csv and
-    out_dir/pinocchio.html (atomically) and return the tidy table (columns of
+    """Compare gpme with Pinocchio for every scenario; write the rows
+    (crosscheck.reports.rows: out_dir/checks/pinocchio/) and out_dir/pinocchio.html
+    (atomically) and return the tidy table (columns of
     crosscheck.compare.COLUMNS plus ``section``; one row per quantity, model case and state).
 
     scenarios: gpme_io.scenario.Scenario objects; None: default_scenarios(quick) (the crane).
