@@ -294,7 +294,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                previous=(None, "", None)):
     from .run_checks import run_warnings
     start = time.perf_counter()
-    tables, runs, timings = {}, None, {}
+    tables, timings = {}, {}
     record = _models_record(scenarios if scenarios is not None else
                             default_scenarios("pinocchio", quick))
     atomic_write_text(staging / "models.json", json.dumps(record, indent=1))
@@ -306,7 +306,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         try:
             if step == "gpme":
                 if scenarios is None:
-                    tables[step], runs = _paper_step(staging, quick, progress, max_wall_s)
+                    tables[step], _ = _paper_step(staging, quick, progress, max_wall_s)
                 else:
                     tables[step] = _models_step(staging, scenarios, quick, progress,
                                                 max_wall_s)
@@ -340,7 +340,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     previous_doc, source, note = previous
     document["diff"] = run_diff.diff_summaries(previous_doc, document, source=source, note=note)
     atomic_write_text(staging / "summary.json", strict_json.dumps(document))
-    write_index(staging, summary, rows, runs, meta, record, diff=document["diff"],
+    write_index(staging, summary, rows, meta, record, diff=document["diff"],
                 names=_model_names(scenarios, quick, only))
     (staging / OWNER_FILE).unlink()
     with exclusive_output(root):            # one publisher at a time: name and `latest`

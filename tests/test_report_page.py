@@ -71,7 +71,7 @@ def page(tmp_path_factory):
                        "current": 1e-4, "status": "pass"}],
             "status_changed": [], "new": [], "vanished": [], "versions_changed": {},
             "mode_changed": [], "definition": "error / tolerance of each check"}
-    index_page.write_index(run_dir, summary, rows, None, meta, [], diff=diff,
+    index_page.write_index(run_dir, summary, rows, meta, [], diff=diff,
                            names={"coordinates": set(COORDINATES),
                                   "constraints": set(CONSTRAINTS)})
     return run_dir, summary, (run_dir / "index.html").read_text(encoding="utf-8")

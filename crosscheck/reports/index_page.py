@@ -18,7 +18,7 @@ from .check_plots import write_spread_plots
 from .html import render, table as html_table_data
 from .matrix import legend, matrix_blocks
 from .rows import CHECKS_DIR, TOLERANCES_FILE, check_id, slice_path
-from .tables import atomic_write_text
+from .tables import atomic_write_text, checks_worst_first
 
 PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
                   "flexible crane (paper Fig. 2)"),
@@ -138,16 +138,12 @@ def _reasons(summary):
 
 
 def _engines(run_dir, summary, spreads, reason_ids):
-    order = {FAIL: 0, PASS: 1, INFO: 2}
     out = []
     for engine, eg in summary.groupby("engine", sort=False):
         models = []
         for model, mg in eg.groupby("model", sort=False):
-            ranked = mg.assign(_o=mg["status"].map(order),
-                               _r=mg["error_over_tolerance"].fillna(-1.0)) \
-                .sort_values(["_o", "_r"], ascending=[True, False], kind="stable")
             checks = []
-            for r in ranked.to_dict("records"):
+            for r in checks_worst_first(mg).to_dict("records"):
                 rows_file = slice_path(r["check"])
                 checks.append({
                     "id": check_id(r["check"]), "status": r["status"],
@@ -205,9 +201,7 @@ def _key_plots(run_dir, summary, spreads, runs):
     plots = []
     gated = summary[summary["status"] != INFO]
     if len(gated):
-        order = gated.assign(_f=gated["status"] == FAIL).sort_values(
-            ["_f", "error_over_tolerance"], ascending=[False, False], kind="stable")
-        worst = order.iloc[0]
+        worst = checks_worst_first(gated).iloc[0]
         href = _engine_plot(run_dir, worst["engine"], worst["section"], worst["model"], spreads)
         if href:
             word = "failing" if worst["status"] == FAIL else "closest to its tolerance"
@@ -268,12 +262,12 @@ def _benchmarks(bench_dir):
             "figure": "../benchmarks/evaluation_costs.png"}
 
 
-def write_index(run_dir, summary, rows, runs, meta, models=(), diff=None, names=None):
+def write_index(run_dir, summary, rows, meta, models=(), diff=None, names=None):
     """Write run_dir/index.html (and the spread plots under run_dir/plots/) atomically.
 
     summary: verify's one row per check (check, engine, section, model, quantity, status,
-    error_over_tolerance, tolerance, worst_*, reason); rows: all comparison rows; runs:
-    unused (kept for callers); meta: verify_meta.environment(); models: models.json's
+    error_over_tolerance, tolerance, worst_*, reason); rows: all comparison rows; meta:
+    verify_meta.environment(); models: models.json's
     record; diff: summary.json's diff against the previous run; names: {"coordinates":
     names, "constraints": names} of the models, to group the matrix rows."""
     run_dir = Path(run_dir)

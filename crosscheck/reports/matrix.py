@@ -14,6 +14,7 @@ import numpy as np
 
 from ..compare import CRASH_QUANTITY, FAIL, INFO
 from .rows import check_id
+from .tables import checks_worst_first
 
 # log10(error / tolerance) from GREEN_AT (far inside the tolerance) to 0 (at the
 # tolerance): hue from green to amber; failures red, information grey
@@ -87,11 +88,7 @@ class Cell:
 
 def _cell(group):
     """The cell of a group of checks (summary rows): its worst check."""
-    order = {FAIL: 0, "pass": 1, INFO: 2}
-    ranked = group.assign(_o=group["status"].map(order),
-                          _r=group["error_over_tolerance"].fillna(-1.0)) \
-        .sort_values(["_o", "_r"], ascending=[True, False], kind="stable")
-    worst = ranked.iloc[0]
+    worst = checks_worst_first(group).iloc[0]
     ratio = worst["error_over_tolerance"]
     ratio = None if ratio is None or (isinstance(ratio, float) and ratio != ratio) else ratio
     status = worst["status"]

@@ -36,6 +36,16 @@ def worst_first(df):
                      kind="stable", na_position="last").drop(columns="_order")
 
 
+def checks_worst_first(summary):
+    """The checks of a summary (one row per check: status, error_over_tolerance) failures
+    first, then by decreasing error over tolerance, information checks last; stable."""
+    order = {s: k for k, s in enumerate(STATUSES)}
+    return summary.assign(_o=summary["status"].map(order),
+                          _r=summary["error_over_tolerance"].fillna(-1.0)) \
+        .sort_values(["_o", "_r"], ascending=[True, False], kind="stable") \
+        .drop(columns=["_o", "_r"])
+
+
 def worst_status(statuses):
     """The status of a group of rows: "fail" if any row fails, else "pass" if any row is
     gated, else "info" (a group of information rows only is never a pass)."""
