@@ -1,0 +1,294 @@
+"""A ProgrammedMotion packed for the fused compiled kernels (gpme_core.kernels).
+
+:func:`for_system` gives a :class:`CompiledSystem` (or None with the reason when the system
+cannot be compiled).  What compiles:
+
+* constraints: EllipseConstraint, CoordinateProgramme, JointProgramme and
+  SympyPointConstraint (its phi and derivatives generated as straight-line code after
+  SymPy's common-subexpression elimination, compiled by numba once);
+* time functions of programmes and drives: Constant, Cosine, Sine, QuinticRamp,
+  Tabulated and SympyTimeFunction (generated the same way).
+
+Anything else (a PointConstraint or TimeFunction subclass of the user's, a drive given as
+a plain Python callable) keeps the Python path: gpme_core.integrate uses it and says why.
+The class of each object is checked exactly (a subclass may override what it computes).
+
+Numeric parameters are passed to the kernels as arrays, so changing a mass, a length, an
+ellipse or a programme's amplitude does not recompile; only SymPy expressions become code.
+Systems without SymPy parts use gpme_core.kernels itself; with them, a module is
+generated from gpme_core/kernels.py with the stub section replaced, written once per
+distinct source under GPME_KERNEL_CACHE (default ~/.cache/gpme/kernels) and compiled by
+numba with its on-disk cache, so a second process does not compile again.
+"""
+import hashlib
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import fast, kernels
+from .atomic import atomic_write_text
+from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
+                          SympyPointConstraint)
+from .gpme import SINGULAR_RCOND
+from .time_functions import (Constant, Cosine, QuinticRamp, Sine, SympyTimeFunction,
+                             Tabulated)
+
+DIVERGENCE_LIMIT = 1e6          # same meaning as gpme_core.integrate.DIVERGENCE_LIMIT
+_BEGIN = "# --- user functions: begin ---"
+_END = "# --- user functions: end ---"
+
+
+class NotCompilable(Exception):
+    """The system holds a part the kernels cannot express (the message says which)."""
+
+
+class _Tables:
+    """Time functions, points and generated SymPy code collected while packing."""
+
+    def __init__(self):
+        self.f_kind, self.f_off, self.f_par = [], [], []
+        self.user_times, self.user_points = [], []
+        self.points = {}
+
+    def time_function(self, fn, label):
+        kind = type(fn)
+        if kind is Constant:
+            entry = (kernels.F_CONSTANT, [fn.level])
+        elif kind is Cosine:
+            entry = (kernels.F_COSINE, [fn.offset, fn.amplitude, fn.omega])
+        elif kind is Sine:
+            entry = (kernels.F_SINE, [fn.offset, fn.amplitude, fn.omega, fn.phase])
+        elif kind is QuinticRamp:
+            entry = (kernels.F_QUINTIC, [fn.level, fn.ramp_time])
+        elif kind is Tabulated:
+            coef = np.asarray(fn._coefficients, dtype=float).ravel()
+            entry = (kernels.F_TABULATED, [len(fn.times), *fn.times, *coef, fn.values[0],
+                                           fn.values[-1]])
+        elif kind is SympyTimeFunction:
+            self.user_times.append(fn)
+            entry = (kernels.F_USER, [len(self.user_times) - 1])
+        else:
+            raise NotCompilable(f"{label} is a {kind.__name__}, which the compiled kernels do "
+                                "not know (they know Constant, Cosine, Sine, QuinticRamp, "
+                                "Tabulated and SympyTimeFunction)")
+        self.f_kind.append(entry[0])
+        self.f_off.append(sum(len(p) for p in self.f_par))
+        self.f_par.append([float(v) for v in entry[1]])
+        return len(self.f_kind) - 1
+
+    def point(self, link, r_local):
+        key = (int(link), tuple(float(v) for v in r_local))
+        return self.points.setdefault(key, len(self.points))
+
+
+def pack(system):
+    """(md, cd, user_points, user_times) of ``system`` for gpme_core.kernels; NotCompilable
+    names the first part that cannot be compiled."""
+    model = system.model
+    tables = _Tables()
+    m = system.n_constraints
+    c_kind = np.zeros(m, dtype=np.int64)
+    c_point = np.zeros(m, dtype=np.int64)
+    c_fun = np.full(m, -1, dtype=np.int64)
+    c_par = np.zeros((m, 4))
+    for c, (spec, bound) in enumerate(zip(system.constraint_specs, system.bound)):
+        kind = type(spec)
+        label = f"constraint {spec.name!r}"
+        if kind is JointProgramme:
+            c_kind[c] = kernels.C_JOINT
+            c_par[c, 0] = bound.k
+            c_fun[c] = tables.time_function(spec.function, f"the programme of {label}")
+            continue
+        if kind is EllipseConstraint:
+            c_kind[c] = kernels.C_ELLIPSE
+            c_par[c] = (1.0 / spec.a ** 2, 1.0 / spec.b ** 2, spec.center[0], spec.center[1])
+        elif kind is CoordinateProgramme:
+            c_kind[c] = kernels.C_COORDINATE
+            c_par[c, 0] = spec.axis
+            c_fun[c] = tables.time_function(spec.function, f"the programme of {label}")
+        elif kind is SympyPointConstraint:
+            c_kind[c] = kernels.C_USER_POINT
+            tables.user_points.append(spec)
+            c_par[c, 0] = len(tables.user_points) - 1
+        else:
+            raise NotCompilable(f"{label} is a {kind.__name__}, which the compiled kernels do "
+                                "not know (they know EllipseConstraint, CoordinateProgramme, "
+                                "JointProgramme and SympyPointConstraint)")
+        c_point[c] = tables.point(bound.link, bound.r_local)
+    d_coord, d_fun = [], []
+    for d in model.drives:
+        d_coord.append(model.index(d.joint))
+        d_fun.append(tables.time_function(d.function, f"the drive on {d.joint!r}"))
+    p_link = np.array([k[0] for k in tables.points], dtype=np.int64)
+    p_r = np.array([k[1] for k in tables.points], dtype=float).reshape(-1, 3)
+    f_par = np.array([v for p in tables.f_par for v in p], dtype=float)
+    md = (np.ascontiguousarray(model.origins), np.ascontiguousarray(model.generators),
+          np.ascontiguousarray(model.is_revolute), np.ascontiguousarray(model.pseudo_inertias),
+          np.ascontiguousarray(model.gamma, dtype=float),
+          np.ascontiguousarray(model.stiffness, dtype=float),
+          np.ascontiguousarray(model.spring_reference, dtype=float),
+          np.ascontiguousarray(model.damping, dtype=float),
+          np.ascontiguousarray(model.lower_limits, dtype=float),
+          np.ascontiguousarray(model.upper_limits, dtype=float))
+    cd = (c_kind, c_point, c_fun, c_par, p_link, p_r,
+          np.array(tables.f_kind, dtype=np.int64), np.array(tables.f_off, dtype=np.int64),
+          f_par if f_par.size else np.zeros(1), np.array(d_coord, dtype=np.int64),
+          np.array(d_fun, dtype=np.int64))
+    return md, cd, tables.user_points, tables.user_times
+
+
+# ---------------------------------------------------------------- code generation
+def _straight_line(name, args, exprs, n_out):
+    """Source of an njit function ``name(*args, out)`` writing exprs into out[0..n_out)
+    after common-subexpression elimination (math module calls)."""
+    import sympy as sp
+    from sympy.printing.pycode import PythonCodePrinter
+    printer = PythonCodePrinter({"fully_qualified_modules": True, "standard": "python3"})
+    replacements, reduced = sp.cse(list(exprs), symbols=sp.numbered_symbols("_cse"))
+    lines = ["@_jit", f"def {name}({', '.join(str(a) for a in args)}, out):"]
+    for sym, sub in replacements:
+        lines.append(f"    {sym} = {printer.doprint(sub)}")
+    for k, e in enumerate(reduced):
+        lines.append(f"    out[{k}] = float({printer.doprint(e)})")
+    assert len(reduced) == n_out
+    return "\n".join(lines)
+
+
+def _named_symbols(expr, names):
+    import sympy as sp
+    by_name = {s.name: s for s in expr.free_symbols}
+    return [by_name.get(nm, sp.Symbol(nm)) for nm in names]
+
+
+def _dispatch(name, args, impls, n_out):
+    lines = ["@_jit", f"def {name}(index, {', '.join(args)}, out):"]
+    for k, impl in enumerate(impls):
+        lines.append(f"    {'if' if k == 0 else 'elif'} index == {k}:")
+        lines.append(f"        {impl}({', '.join(args)}, out)")
+    lines.append("    " + ("else:\n        " if impls else "") + f"for i in range({n_out}):")
+    lines.append(("        " if impls else "    ") + "    out[i] = np.nan")
+    return "\n".join(lines)
+
+
+def user_source(user_points, user_times):
+    """Python source of the user-function section for these SymPy constraints and time
+    functions (gpme_core.kernels' stubs replaced)."""
+    import sympy as sp
+    parts, point_impls, time_impls = [], [], []
+    for k, spec in enumerate(user_points):
+        x, y, z, t = _named_symbols(spec.expr, ("x", "y", "z", "t"))
+        phi = spec.expr
+        grad = [sp.diff(phi, v) for v in (x, y, z)]
+        hess = [sp.diff(g, v) for g in grad for v in (x, y, z)]
+        phi_t = sp.diff(phi, t)
+        grad_t = [sp.diff(phi_t, v) for v in (x, y, z)]
+        exprs = [phi, *grad, *hess, phi_t, *grad_t, sp.diff(phi_t, t)]
+        fname = f"_user_point_{k}"
+        parts.append(_straight_line(fname, (x, y, z, t), exprs, 18))
+        point_impls.append(fname)
+    for k, fn in enumerate(user_times):
+        t = fn.t_symbol
+        exprs = [fn.expr, sp.diff(fn.expr, t), sp.diff(fn.expr, t, 2)]
+        fname = f"_user_time_{k}"
+        parts.append(_straight_line(fname, (t,), exprs, 3))
+        time_impls.append(fname)
+    parts.append(_dispatch("user_point_terms", ("x", "y", "z", "t"), point_impls, 18))
+    parts.append(_dispatch("user_time_terms", ("t",), time_impls, 3))
+    return "\n\n\n".join(parts) + "\n"
+
+
+def kernel_cache_dir():
+    """Directory of the generated kernel modules (GPME_KERNEL_CACHE or ~/.cache/gpme/kernels)."""
+    return Path(os.environ.get("GPME_KERNEL_CACHE") or Path.home() / ".cache" / "gpme" / "kernels")
+
+
+_MODULES = {}
+
+
+def generated_kernels(user_points, user_times):
+    """gpme_core.kernels itself without SymPy parts, else the generated module for them."""
+    if not user_points and not user_times:
+        return kernels
+    template = Path(kernels.__file__).read_text(encoding="utf-8")
+    head, rest = template.split(_BEGIN, 1)
+    _, tail = rest.split(_END, 1)
+    source = (head.replace("from .fast import", "from gpme_core.fast import")
+              + _BEGIN + "\n\n\n" + user_source(user_points, user_times) + "\n" + _END + tail)
+    digest = hashlib.sha256(source.encode("utf-8")).hexdigest()[:20]
+    if digest in _MODULES:
+        return _MODULES[digest]
+    path = kernel_cache_dir() / f"gpme_kernels_{digest}.py"
+    if not path.exists() or path.read_text(encoding="utf-8") != source:
+        atomic_write_text(path, source)
+    name = f"gpme_generated_kernels_{digest}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _MODULES[digest] = module
+    return module
+
+
+class CompiledSystem:
+    """The arrays of one ProgrammedMotion and the kernels module that evaluates them.
+
+    md, cd : data tuples (gpme_core.kernels); module: gpme_core.kernels or a generated one.
+    The partition (ic, dc) is an argument of every call: it belongs to the run.
+    """
+
+    def __init__(self, system):
+        self.system = system
+        self.md, self.cd, user_points, user_times = pack(system)
+        self.module = generated_kernels(user_points, user_times)
+        self.n = system.model.n_coordinates
+        self.m = system.n_constraints
+        self.paper_eq7 = 1.0 if system.damping_form == "paper-eq7" else 0.0
+
+    def options(self, switch_below=None):
+        """The opts tuple of gpme_core.kernels (switch_below None: never switch)."""
+        return (float(self.system.alpha), float(self.system.beta), self.paper_eq7,
+                0.0 if switch_below is None else float(switch_below), SINGULAR_RCOND,
+                DIVERGENCE_LIMIT)
+
+    def evaluate(self, t, q, q_dot, ic, dc, switch_below=None):
+        """(status, q_ddot (n,), multipliers (m,), info (kernels.INFO_SIZE,)) at (t, q, q_dot)."""
+        q_ddot = np.empty(self.n)
+        lam = np.empty(self.m)
+        info = np.empty(kernels.INFO_SIZE)
+        status = fast.run(self.module.evaluate, float(t), np.asarray(q, dtype=float),
+                          np.asarray(q_dot, dtype=float), self.md, self.cd,
+                          self.options(switch_below), ic, dc, q_ddot, lam, info)
+        return status, q_ddot, lam, info
+
+    def accelerator(self, ic, dc):
+        """A function (t, q, q_dot) -> q_ddot (n,) for a fixed partition, its buffers
+        allocated once (the benchmark's one evaluation); raises RuntimeError with the
+        status when an evaluation fails."""
+        evaluate, md, cd, opts = self.module.evaluate, self.md, self.cd, self.options()
+        q_ddot, lam, info = np.empty(self.n), np.empty(self.m), np.empty(kernels.INFO_SIZE)
+
+        def accelerations(t, q, q_dot):
+            status = evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info)
+            if status != kernels.OK:
+                raise RuntimeError(f"compiled evaluation failed with status {status}")
+            return q_ddot
+        return accelerations
+
+
+def for_system(system):
+    """(CompiledSystem or None, reason): the compiled form of ``system``, cached on it; None
+    when gpme_core.fast is disabled (GPME_NO_JIT=1) or a part cannot be compiled."""
+    if not fast.ENABLED:
+        return None, "compiled kernels disabled (GPME_NO_JIT)"
+    cached = system.__dict__.get("_compiled")
+    if cached is not None and cached[0] is system.bound:    # copies share the constraints
+        return cached[1]
+    try:
+        result = (CompiledSystem(system), "")
+    except NotCompilable as exc:
+        result = (None, str(exc))
+    system.__dict__["_compiled"] = (system.bound, result)
+    return result

@@ -1,0 +1,726 @@
+"""Fused compiled right-hand side of the GPME and the compiled integrator loops.
+
+One call of :func:`evaluate` does, without Python in between: the chain kinematics and
+the trace-form terms M, h, g (gpme_core.fast), springs, dampers and drives, the rows of
+the programmed constraints (Phi, Phi_dot, A, kappa) and the reduced GPME solve with its
+multipliers.  :func:`rk4_advance` and :func:`radau_advance` integrate it over a number of
+fixed steps without returning to Python.  gpme_core.compiled packs a ProgrammedMotion into
+the arrays these take; gpme_core.integrate drives them.
+
+Reduced solve (same equations as gpme_core.gpme, solved through the symmetric form): with
+Gamma = -A_dc^-1 A_ic, N = [I; Gamma] (rows ordered as q) and a particular solution p of
+A p = c (p_dc = A_dc^-1 c, p_ic = 0), q_ddot = N z + p where
+
+    (N^T M N) z = N^T (h + Q - M p)        ((n - m) x (n - m), symmetric positive definite)
+
+which is paper eq. 7 with A q_ddot = c substituted; Cholesky instead of the LU of the
+unsymmetric n x n system of gpme_core.gpme (same solution, half the work, no pivoting).
+Multipliers: lambda = A_dc^-T (M q_ddot - h - Q)_dc.
+
+Everything is SI; q, q_dot (n,) ordered as model.coordinate_names.  Data tuples (built by
+gpme_core.compiled.pack):
+
+    md = (origins (n,4,4), generators (n,4,4), is_revolute (n,) bool, pseudo_inertias
+          (n,4,4), gamma (4,), stiffness (n,), spring_reference (n,), damping (n,),
+          lower_limits (n,), upper_limits (n,))
+    cd = (c_kind (m,) int, c_point (m,) int, c_fun (m,) int, c_par (m, 4), p_link (P,) int,
+          p_r (P, 3) m, f_kind (F,) int, f_off (F,) int, f_par (.,), d_coord (D,) int,
+          d_fun (D,) int)
+    opts = (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
+            divergence_limit)
+
+Errors are status codes (never exceptions, never NaN results): the caller re-evaluates
+the failing state with the Python reference (gpme_core.gpme) to raise the error message.
+
+The section between the "user functions" markers is replaced by generated code for SymPy
+constraints and time functions (gpme_core.compiled); here it holds stubs.
+"""
+import math
+
+import numpy as np
+
+from .fast import _jit, chain, point, terms
+
+# ---------------------------------------------------------------- status codes
+OK = 0
+SINGULAR_PARTITION = 1      # partition rcond <= singular_rcond
+SINGULAR_REDUCED = 2        # N^T M N not positive definite
+NOT_FINITE = 3              # a constraint, time function or drive value is not finite
+SWITCH = 4                  # partition rcond < switch_below: re-choose dependent coordinates
+DIVERGED = 5                # state not finite or above divergence_limit
+OUT_OF_RANGE = 6            # a coordinate left its limits
+NEWTON_FAILED = 7           # the implicit stage equations did not converge
+
+# ---------------------------------------------------------------- kinds
+C_ELLIPSE = 0               # c_par = (1/a^2, 1/b^2, x_c, y_c)
+C_COORDINATE = 1            # c_par = (axis, ., ., .), phi = p[axis] - f(t)
+C_JOINT = 2                 # c_par = (k, ., ., .), phi = q_k - f(t)
+C_USER_POINT = 3            # c_par = (user index, ., ., .), generated local terms
+F_CONSTANT = 0              # (level)
+F_COSINE = 1                # (offset, amplitude, omega)
+F_SINE = 2                  # (offset, amplitude, omega, phase)
+F_QUINTIC = 3               # (level, ramp_time)
+F_TABULATED = 4             # (k, times (k), coefficients (k - 1, 4) row-major, v_first, v_last)
+F_USER = 5                  # (user index)
+
+INFO_SIZE = 5               # info: partition rcond, W rates (dissipated, drive, reaction), spare
+N_WORK = 3
+
+# --- user functions: begin ---
+
+
+@_jit
+def user_point_terms(index, x, y, z, t, out):
+    """Generated: the 18 local terms (phi, grad (3), Hessian (3x3 row-major), phi_t,
+    grad_t (3), phi_tt) of SymPy point constraint ``index`` at world point (x, y, z) m,
+    time t s, into out (18,).  Stub: no user constraints."""
+    for i in range(18):
+        out[i] = np.nan
+
+
+@_jit
+def user_time_terms(index, t, out):
+    """Generated: (f, f', f'') of SymPy time function ``index`` at t s into out (3,)."""
+    for i in range(3):
+        out[i] = np.nan
+
+# --- user functions: end ---
+
+
+@_jit
+def time_function(kind, off, par, t, out):
+    """(f, f', f'') of time function of ``kind`` with parameters par[off:] at t s -> out."""
+    if kind == F_CONSTANT:
+        out[0], out[1], out[2] = par[off], 0.0, 0.0
+    elif kind == F_COSINE or kind == F_SINE:
+        amp, omega = par[off + 1], par[off + 2]
+        arg = omega * t + (par[off + 3] if kind == F_SINE else 0.0)
+        c, s = math.cos(arg), math.sin(arg)
+        if kind == F_COSINE:
+            out[0], out[1], out[2] = par[off] + amp * c, -amp * omega * s, -amp * omega * omega * c
+        else:
+            out[0], out[1], out[2] = par[off] + amp * s, amp * omega * c, -amp * omega * omega * s
+    elif kind == F_QUINTIC:
+        level, ramp = par[off], par[off + 1]
+        s = min(max(t / ramp, 0.0), 1.0)
+        out[0] = level * s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
+        out[1] = level * 30.0 * s * s * (1.0 - s) ** 2 / ramp
+        out[2] = level * 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / ramp ** 2
+    elif kind == F_TABULATED:
+        k = int(par[off])
+        times = off + 1
+        coef = times + k
+        if not (par[times] < t < par[times + k - 1]):
+            out[0] = par[coef + 4 * (k - 1)] if t <= par[times] else par[coef + 4 * (k - 1) + 1]
+            out[1], out[2] = 0.0, 0.0
+        else:
+            lo, hi = 0, k - 1            # par[times + lo] <= t < par[times + hi]
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if par[times + mid] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+            s = t - par[times + lo]
+            a, b = par[coef + 4 * lo], par[coef + 4 * lo + 1]
+            c, d = par[coef + 4 * lo + 2], par[coef + 4 * lo + 3]
+            out[0] = a + s * (b + s * (c + s * d))
+            out[1] = b + s * (2.0 * c + 3.0 * s * d)
+            out[2] = 2.0 * c + 6.0 * s * d
+    else:
+        user_time_terms(int(par[off]), t, out)
+
+
+@_jit
+def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
+    """The 18 local terms of a point constraint at world point p (3,) m -> out (18,)."""
+    for i in range(18):
+        out[i] = 0.0
+    if kind == C_ELLIPSE:
+        rx, ry = p[0] - par[2], p[1] - par[3]
+        out[0] = par[0] * rx * rx + par[1] * ry * ry - 1.0
+        out[1], out[2] = 2.0 * par[0] * rx, 2.0 * par[1] * ry
+        out[4], out[8] = 2.0 * par[0], 2.0 * par[1]
+    elif kind == C_COORDINATE:
+        axis = int(par[0])
+        time_function(f_kind[fun], f_off[fun], f_par, t, tf)
+        out[0] = p[axis] - tf[0]
+        out[1 + axis] = 1.0
+        out[13], out[17] = -tf[1], -tf[2]
+    else:
+        user_point_terms(int(par[0]), p[0], p[1], p[2], t, out)
+
+
+@_jit
+def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+    """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
+    value is not finite."""
+    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par = cd[:9]
+    m = c_kind.shape[0]
+    n = q.shape[0]
+    n_points = p_link.shape[0]
+    pos = np.empty((n_points, 3))
+    vel = np.empty((n_points, 3))
+    drift = np.empty((n_points, 3))
+    jac = np.empty((n_points, 3, n))
+    for k in range(n_points):
+        pos[k], vel[k], jac[k], drift[k] = point(t_all, s_all, q_dot, p_link[k], p_r[k])
+    lt = np.empty(18)
+    tf = np.empty(3)
+    for c in range(m):
+        kind = c_kind[c]
+        if kind == C_JOINT:
+            k = int(c_par[c, 0])
+            time_function(f_kind[c_fun[c]], f_off[c_fun[c]], f_par, t, tf)
+            phi[c] = q[k] - tf[0]
+            for j in range(n):
+                a[c, j] = 0.0
+            a[c, k] = 1.0
+            phi_dot[c] = q_dot[k] - tf[1]
+            kappa[c] = -tf[2]
+        else:
+            pt = c_point[c]
+            _local_terms(kind, c_par[c], c_fun[c], f_kind, f_off, f_par, pos[pt], t, lt, tf)
+            v = vel[pt]
+            for j in range(n):
+                a[c, j] = lt[1] * jac[pt, 0, j] + lt[2] * jac[pt, 1, j] + lt[3] * jac[pt, 2, j]
+            phi[c] = lt[0]
+            phi_dot[c] = lt[1] * v[0] + lt[2] * v[1] + lt[3] * v[2] + lt[13]
+            quad = 0.0
+            for i in range(3):
+                for j in range(3):
+                    quad += v[i] * lt[4 + 3 * i + j] * v[j]
+            kappa[c] = (lt[1] * drift[pt, 0] + lt[2] * drift[pt, 1] + lt[3] * drift[pt, 2]
+                        + quad + 2.0 * (lt[14] * v[0] + lt[15] * v[1] + lt[16] * v[2])
+                        + lt[17])
+        if not (math.isfinite(phi[c]) and math.isfinite(phi_dot[c])
+                and math.isfinite(kappa[c])):
+            return False
+    return True
+
+
+@_jit
+def _cholesky_solve(mat, b):
+    """Solve mat x = b for symmetric positive definite mat (r, r) in place of a copy;
+    returns (x, ok)."""
+    r = b.shape[0]
+    low = mat.copy()
+    for j in range(r):
+        d = low[j, j]
+        for p in range(j):
+            d -= low[j, p] * low[j, p]
+        if not d > 0.0:
+            return b.copy(), False
+        d = math.sqrt(d)
+        low[j, j] = d
+        for i in range(j + 1, r):
+            s = low[i, j]
+            for p in range(j):
+                s -= low[i, p] * low[j, p]
+            low[i, j] = s / d
+    x = b.copy()
+    for i in range(r):
+        s = x[i]
+        for p in range(i):
+            s -= low[i, p] * x[p]
+        x[i] = s / low[i, i]
+    for i in range(r - 1, -1, -1):
+        s = x[i]
+        for p in range(i + 1, r):
+            s -= low[p, i] * x[p]
+        x[i] = s / low[i, i]
+    return x, True
+
+
+@_jit
+def _invert_small(a_dc):
+    """(inverse, ok) of a small square matrix by Gauss-Jordan with partial pivoting."""
+    k = a_dc.shape[0]
+    work = a_dc.copy()
+    inv = np.eye(k)
+    for col in range(k):
+        piv = col
+        for r in range(col + 1, k):
+            if abs(work[r, col]) > abs(work[piv, col]):
+                piv = r
+        if work[piv, col] == 0.0:
+            return inv, False
+        if piv != col:
+            for c in range(k):
+                work[col, c], work[piv, c] = work[piv, c], work[col, c]
+                inv[col, c], inv[piv, c] = inv[piv, c], inv[col, c]
+        d = work[col, col]
+        for c in range(k):
+            work[col, c] /= d
+            inv[col, c] /= d
+        for r in range(k):
+            if r != col:
+                f = work[r, col]
+                if f != 0.0:
+                    for c in range(k):
+                        work[r, c] -= f * work[col, c]
+                        inv[r, c] -= f * inv[col, c]
+    return inv, True
+
+
+@_jit
+def partition_rcond(a, dc, inv):
+    """gpme_core.gpme.partition_rcond from A (m, n), dc (m,) and inv = A_dc^-1."""
+    m, n = a.shape
+    norm_dc, inv_norm, norm_a = 0.0, 0.0, 0.0
+    for j in range(m):
+        s, si = 0.0, 0.0
+        for i in range(m):
+            s += abs(a[i, dc[j]])
+            si += abs(inv[i, j])
+        norm_dc = max(norm_dc, s)
+        inv_norm = max(inv_norm, si)
+    for j in range(n):
+        s = 0.0
+        for i in range(m):
+            s += abs(a[i, j])
+        norm_a = max(norm_a, s)
+    if not (norm_dc > 0.0 and inv_norm > 0.0 and norm_a > 0.0 and math.isfinite(inv_norm)):
+        return 0.0
+    # rcond(A_dc) ||A_dc||_1 / ||A||_1 = 1 / (||A_dc^-1||_1 ||A||_1)
+    return 1.0 / (inv_norm * norm_a)
+
+
+@_jit
+def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot, lam):
+    """(status, partition rcond): q_ddot (n,) and multipliers lam (m,) of the reduced GPME
+    (module docstring) for the partition (ic, dc); status SWITCH before solving when the
+    partition rcond < switch_below."""
+    n = m_mat.shape[0]
+    k = dc.shape[0]
+    ni = ic.shape[0]
+    a_dc = np.empty((k, k))
+    for i in range(k):
+        for j in range(k):
+            a_dc[i, j] = a[i, dc[j]]
+    inv, ok = _invert_small(a_dc)
+    if not ok:
+        return SINGULAR_PARTITION, 0.0
+    rel = partition_rcond(a, dc, inv)
+    if not rel > singular_rcond:
+        return SINGULAR_PARTITION, rel
+    if rel < switch_below:
+        return SWITCH, rel
+    gam = np.empty((k, ni))                  # Gamma = -A_dc^-1 A_ic
+    for i in range(k):
+        for j in range(ni):
+            s = 0.0
+            for p in range(k):
+                s += inv[i, p] * a[p, ic[j]]
+            gam[i, j] = -s
+    p_dc = inv @ c                           # particular solution, dependent part
+    r = rhs.copy()                           # h + Q - M p
+    for i in range(n):
+        s = 0.0
+        for p in range(k):
+            s += m_mat[i, dc[p]] * p_dc[p]
+        r[i] -= s
+    x = np.empty((n, ni))                    # M N
+    for i in range(n):
+        for j in range(ni):
+            s = m_mat[i, ic[j]]
+            for p in range(k):
+                s += m_mat[i, dc[p]] * gam[p, j]
+            x[i, j] = s
+    red = np.empty((ni, ni))                 # N^T M N
+    b = np.empty(ni)
+    for i in range(ni):
+        for j in range(ni):
+            s = x[ic[i], j]
+            for p in range(k):
+                s += gam[p, i] * x[dc[p], j]
+            red[i, j] = s
+        s = r[ic[i]]
+        for p in range(k):
+            s += gam[p, i] * r[dc[p]]
+        b[i] = s
+    z, ok = _cholesky_solve(red, b)
+    if not ok:
+        return SINGULAR_REDUCED, rel
+    for i in range(ni):
+        q_ddot[ic[i]] = z[i]
+    for p in range(k):
+        s = p_dc[p]
+        for j in range(ni):
+            s += gam[p, j] * z[j]
+        q_ddot[dc[p]] = s
+    for i in range(k):                       # lambda = A_dc^-T (M q_ddot - rhs)_dc
+        s = 0.0
+        for p in range(k):
+            f = -rhs[dc[p]]
+            for j in range(n):
+                f += m_mat[dc[p], j] * q_ddot[j]
+            s += inv[p, i] * f
+        lam[i] = s
+    return OK, rel
+
+
+@_jit
+def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
+    """Status of one evaluation at (t s, q (n,), q_dot (n,)); fills q_ddot (n,), lam (m,)
+    and info (INFO_SIZE,) = (partition rcond, q_dot.d (W), q_dot.t (W), q_dot.A^T lam (W),
+    0)."""
+    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping = md[:8]
+    d_coord, d_fun = cd[9], cd[10]
+    f_kind, f_off, f_par = cd[6], cd[7], cd[8]
+    alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
+        opts[3], opts[4]
+    n = q.shape[0]
+    t_all, s_all = chain(origins, generators, is_revolute, q)
+    m_mat, h, g = terms(t_all, s_all, pseudo, gamma, q_dot)
+    drive = np.zeros(n)
+    tf = np.empty(3)
+    for i in range(d_coord.shape[0]):
+        time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
+        drive[d_coord[i]] += tf[0]
+    rhs = np.empty(n)
+    w_diss, w_drive = 0.0, 0.0
+    for i in range(n):
+        d_i = damping[i] * q_dot[i]
+        rhs[i] = h[i] - g[i] - d_i - stiffness[i] * (q[i] - q_ref[i]) + drive[i]
+        if paper_eq7 != 0.0:
+            rhs[i] -= d_i
+        w_diss += q_dot[i] * d_i
+        w_drive += q_dot[i] * drive[i]
+    info[1], info[2], info[3], info[4] = w_diss, w_drive, 0.0, 0.0
+    if not (math.isfinite(w_drive)):
+        return NOT_FINITE
+    k = dc.shape[0]
+    if k == 0:
+        x, ok = _cholesky_solve(m_mat, rhs)
+        q_ddot[:] = x
+        info[0] = 1.0
+        return OK if ok else SINGULAR_REDUCED
+    phi = np.empty(k)
+    phi_dot = np.empty(k)
+    kappa = np.empty(k)
+    a = np.empty((k, n))
+    if not constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+        return NOT_FINITE
+    c = np.empty(k)
+    for i in range(k):
+        c[i] = -kappa[i] - 2.0 * alpha * phi_dot[i] - beta * beta * phi[i]
+    status, rel = reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond,
+                                q_ddot, lam)
+    info[0] = rel
+    if status != OK:
+        return status
+    w_react = 0.0
+    for j in range(n):
+        s = 0.0
+        for i in range(k):
+            s += a[i, j] * lam[i]
+        w_react += q_dot[j] * s
+    info[3] = w_react
+    return OK
+
+
+@_jit
+def state_status(y, n, md, limit):
+    """DIVERGED, OUT_OF_RANGE or OK for a state y = (q, q_dot, W)."""
+    lower, upper = md[8], md[9]
+    for i in range(2 * n):
+        if not (math.isfinite(y[i]) and abs(y[i]) <= limit):
+            return DIVERGED
+    for i in range(n):
+        if y[i] < lower[i] or y[i] > upper[i]:
+            return OUT_OF_RANGE
+    return OK
+
+
+@_jit
+def derivative(t, y, md, cd, opts, ic, dc, dy, lam, info):
+    """dy = (q_dot, q_ddot, W rates) of the integrated state y (2 n + 3,); status."""
+    n = md[0].shape[0]
+    q_ddot = np.empty(n)
+    status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, q_ddot, lam, info)
+    dy[:n] = y[n:2 * n]
+    dy[n:2 * n] = q_ddot
+    dy[2 * n], dy[2 * n + 1], dy[2 * n + 2] = info[1], info[2], info[3]
+    return status
+
+
+@_jit
+def rk4_advance(t0, y, dt, n_steps, md, cd, opts, ic, dc, fail_y):
+    """Classical RK4 from (t0, y) over n_steps steps of dt s, y updated in place.
+
+    Returns (status, steps done, t of the failure): on a failed evaluation y stays at the
+    start of the failing step and fail_y holds the state evaluated; on a state that
+    diverges or leaves its range, fail_y holds it (y the step before)."""
+    size = y.shape[0]
+    n = (size - N_WORK) // 2
+    k1, k2, k3, k4 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    stage = np.empty(size)
+    lam = np.empty(dc.shape[0])
+    info = np.empty(INFO_SIZE)
+    for step in range(n_steps):
+        t = t0 + step * dt
+        st = derivative(t, y, md, cd, opts, ic, dc, k1, lam, info)
+        if st != OK:
+            fail_y[:] = y
+            return st, step, t
+        for i in range(size):
+            stage[i] = y[i] + 0.5 * dt * k1[i]
+        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k2, lam, info)
+        if st != OK:
+            fail_y[:] = stage
+            return st, step, t + 0.5 * dt
+        for i in range(size):
+            stage[i] = y[i] + 0.5 * dt * k2[i]
+        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k3, lam, info)
+        if st != OK:
+            fail_y[:] = stage
+            return st, step, t + 0.5 * dt
+        for i in range(size):
+            stage[i] = y[i] + dt * k3[i]
+        st = derivative(t + dt, stage, md, cd, opts, ic, dc, k4, lam, info)
+        if st != OK:
+            fail_y[:] = stage
+            return st, step, t + dt
+        for i in range(size):
+            stage[i] = y[i] + (dt / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        st = state_status(stage, n, md, opts[5])
+        if st != OK:
+            fail_y[:] = stage
+            return st, step, t + dt
+        y[:] = stage
+    return OK, n_steps, t0 + n_steps * dt
+
+
+# ---------------------------------------------------------------- Radau IIA (order 5)
+_SQ6 = math.sqrt(6.0)
+RADAU_C = np.array([(4.0 - _SQ6) / 10.0, (4.0 + _SQ6) / 10.0, 1.0])
+RADAU_A = np.array([
+    [(88.0 - 7.0 * _SQ6) / 360.0, (296.0 - 169.0 * _SQ6) / 1800.0, (-2.0 + 3.0 * _SQ6) / 225.0],
+    [(296.0 + 169.0 * _SQ6) / 1800.0, (88.0 + 7.0 * _SQ6) / 360.0, (-2.0 - 3.0 * _SQ6) / 225.0],
+    [(16.0 - _SQ6) / 36.0, (16.0 + _SQ6) / 36.0, 1.0 / 9.0]])
+RADAU_A2 = RADAU_A @ RADAU_A
+
+
+def _extrapolation_weights():
+    """(3, 4): the previous step's velocity polynomial (through v0 at 0 and V_i at c_i,
+    in units of the step) evaluated at 1 + c_i: the Newton predictor of the next step."""
+    nodes = np.concatenate([[0.0], RADAU_C])
+    weights = np.empty((3, 4))
+    for i, x in enumerate(1.0 + RADAU_C):
+        for j in range(4):
+            others = [nodes[k] for k in range(4) if k != j]
+            weights[i, j] = np.prod([(x - o) / (nodes[j] - o) for o in others])
+    return weights
+
+
+RADAU_EXTRAPOLATION = _extrapolation_weights()
+# radau work arrays' control entries (ctrl (RADAU_CTRL,))
+R_JAC_AGE = 0        # steps since the Jacobian was computed (-1: none yet)
+R_HAVE_PREV = 1      # 1 when the previous step's stages can predict this one
+R_STEP = 2           # the step the Newton matrix was built for
+R_NEWTON_TOL = 3     # scaled Newton increment at which the stages count as converged
+R_ITERATIONS = 4     # Newton iterations done so far (statistics)
+R_JACOBIANS = 5      # Jacobians computed so far
+R_EVALUATIONS = 6    # evaluations of the right-hand side so far
+RADAU_CTRL = 8
+NEWTON_MAX_ITER = 7
+NEWTON_SLOW = 3      # more iterations than this: refresh the Jacobian for the next step
+
+
+@_jit
+def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
+    """Forward-difference Jacobians d q_ddot / d q and d q_ddot / d q_dot (n, n); status."""
+    n = q.shape[0]
+    k = dc.shape[0]
+    base = np.empty(n)
+    out = np.empty(n)
+    lam = np.empty(k)
+    info = np.empty(INFO_SIZE)
+    st = evaluate(t, q, v, md, cd, opts_fd, ic, dc, base, lam, info)
+    if st != OK:
+        return st
+    qp = q.copy()
+    vp = v.copy()
+    root_eps = math.sqrt(2.220446049250313e-16)
+    for j in range(n):
+        dq = root_eps * max(1.0, abs(q[j]))
+        qp[j] = q[j] + dq
+        st = evaluate(t, qp, v, md, cd, opts_fd, ic, dc, out, lam, info)
+        qp[j] = q[j]
+        if st != OK:
+            return st
+        for i in range(n):
+            jq[i, j] = (out[i] - base[i]) / dq
+        dv = root_eps * max(1.0, abs(v[j]))
+        vp[j] = v[j] + dv
+        st = evaluate(t, q, vp, md, cd, opts_fd, ic, dc, out, lam, info)
+        vp[j] = v[j]
+        if st != OK:
+            return st
+        for i in range(n):
+            jv[i, j] = (out[i] - base[i]) / dv
+    return OK
+
+
+@_jit
+def _newton_matrix_inverse(h, jq, jv):
+    """(3 n, 3 n) inverse of I - h (A x Jv) - h^2 (A^2 x Jq), the stage equations'
+    derivative with respect to the stage velocities; (inverse, ok)."""
+    n = jq.shape[0]
+    w = np.zeros((3 * n, 3 * n))
+    for i in range(3):
+        for l in range(3):
+            ha, h2a2 = h * RADAU_A[i, l], h * h * RADAU_A2[i, l]
+            for r in range(n):
+                for s in range(n):
+                    w[i * n + r, l * n + s] = -ha * jv[r, s] - h2a2 * jq[r, s]
+    for r in range(3 * n):
+        w[r, r] += 1.0
+    inv = np.empty((3 * n, 3 * n))
+    ok = True
+    try:
+        inv = np.linalg.inv(w)
+    except Exception:
+        ok = False
+    if ok:
+        for r in range(3 * n):
+            for s in range(3 * n):
+                if not math.isfinite(inv[r, s]):
+                    ok = False
+    return inv, ok
+
+
+@_jit
+def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
+    """Fixed-step three-stage Radau IIA (order 5, L-stable) from (t0, y) over n_steps steps
+    of h s, y = (q, q_dot, W) updated in place.
+
+    Stage equations for the stage velocities V_i (n,) with Q_i = q0 + h sum_j a_ij V_j:
+    V_i = v0 + h sum_j a_ij q_ddot(t0 + c_i h, Q_j, V_j); solved by simplified Newton with
+    the matrix I - h (A x Jv) - h^2 (A^2 x Jq) (finite-difference Jacobians of q_ddot, kept
+    across steps and recomputed when the iteration converges slowly or fails), predictor
+    from the previous step's collocation polynomial.  The work integrals use the same
+    quadrature (the last row of A).  work = (w_inv (3n, 3n), jq (n, n), jv (n, n),
+    v_prev (4, n): v0 and the stage velocities of the last step, ctrl (RADAU_CTRL,)), kept
+    by the caller between calls.  Returns (status, steps done, t of the failure) as
+    :func:`rk4_advance`."""
+    w_inv, jq, jv, v_prev, ctrl = work
+    size = y.shape[0]
+    n = (size - N_WORK) // 2
+    k = dc.shape[0]
+    opts_fd = (opts[0], opts[1], opts[2], 0.0, opts[4], opts[5])
+    vs = np.empty((3, n))
+    qs = np.empty((3, n))
+    fs = np.empty((3, n))
+    ws = np.empty((3, N_WORK))
+    predictor = np.empty((3, n))
+    res = np.empty(3 * n)
+    lam = np.empty(k)
+    info = np.empty(INFO_SIZE)
+    q_ddot = np.empty(n)
+    stage_y = np.empty(size)
+    tol = ctrl[R_NEWTON_TOL]
+    for step in range(n_steps):
+        t = t0 + step * h
+        q0, v0 = y[:n], y[n:2 * n]
+        if ctrl[R_HAVE_PREV] != 0.0:
+            for i in range(3):
+                for r in range(n):
+                    predictor[i, r] = (RADAU_EXTRAPOLATION[i, 0] * v_prev[0, r]
+                                       + RADAU_EXTRAPOLATION[i, 1] * v_prev[1, r]
+                                       + RADAU_EXTRAPOLATION[i, 2] * v_prev[2, r]
+                                       + RADAU_EXTRAPOLATION[i, 3] * v_prev[3, r])
+        else:
+            for i in range(3):
+                predictor[i] = v0
+        converged = False
+        iterations = 0
+        for attempt in range(2):
+            # R_JAC_AGE: -1 none or stale (recompute now), 0 computed at this step's start,
+            # k > 0 computed k steps ago
+            rebuild = ctrl[R_STEP] != h
+            if ctrl[R_JAC_AGE] < 0.0:
+                st = _jacobian(t, q0, v0, md, cd, opts_fd, ic, dc, jq, jv)
+                ctrl[R_EVALUATIONS] += 2 * n + 1
+                ctrl[R_JACOBIANS] += 1
+                if st != OK:
+                    fail_y[:] = y
+                    return st, step, t
+                ctrl[R_JAC_AGE] = 0.0
+                rebuild = True
+            if rebuild:
+                inv, ok = _newton_matrix_inverse(h, jq, jv)
+                if not ok:
+                    fail_y[:] = y
+                    return NEWTON_FAILED, step, t
+                w_inv[:, :] = inv
+                ctrl[R_STEP] = h
+            vs[:, :] = predictor
+            previous = 0.0
+            for it in range(NEWTON_MAX_ITER):
+                iterations = it + 1
+                for i in range(3):
+                    for r in range(n):
+                        qs[i, r] = q0[r] + h * (RADAU_A[i, 0] * vs[0, r] + RADAU_A[i, 1] * vs[1, r]
+                                                + RADAU_A[i, 2] * vs[2, r])
+                    st = evaluate(t + RADAU_C[i] * h, qs[i], vs[i], md, cd, opts, ic, dc,
+                                  q_ddot, lam, info)
+                    ctrl[R_EVALUATIONS] += 1
+                    if st != OK:
+                        stage_y[:n] = qs[i]
+                        stage_y[n:2 * n] = vs[i]
+                        stage_y[2 * n:] = y[2 * n:]
+                        fail_y[:] = stage_y
+                        return st, step, t + RADAU_C[i] * h
+                    fs[i] = q_ddot
+                    ws[i, 0], ws[i, 1], ws[i, 2] = info[1], info[2], info[3]
+                for i in range(3):
+                    for r in range(n):
+                        res[i * n + r] = vs[i, r] - v0[r] - h * (
+                            RADAU_A[i, 0] * fs[0, r] + RADAU_A[i, 1] * fs[1, r]
+                            + RADAU_A[i, 2] * fs[2, r])
+                norm = 0.0
+                for row in range(3 * n):
+                    s = 0.0
+                    for col in range(3 * n):
+                        s -= w_inv[row, col] * res[col]
+                    i, r = row // n, row % n
+                    vs[i, r] += s
+                    norm = max(norm, abs(s) / (1.0 + abs(vs[i, r])))
+                if not math.isfinite(norm):
+                    break
+                if norm <= tol:
+                    converged = True
+                    break
+                if it > 0 and norm > 0.9 * previous:
+                    break                    # not contracting
+                previous = norm
+            ctrl[R_ITERATIONS] += iterations
+            if converged:
+                break
+            if ctrl[R_JAC_AGE] == 0.0:
+                break                        # fresh Jacobian: nothing left to try
+            ctrl[R_JAC_AGE] = -1.0           # retry with a new one
+        if not converged:
+            fail_y[:] = y
+            return NEWTON_FAILED, step, t
+        for r in range(n):
+            stage_y[r] = q0[r] + h * (RADAU_A[2, 0] * vs[0, r] + RADAU_A[2, 1] * vs[1, r]
+                                      + RADAU_A[2, 2] * vs[2, r])
+            stage_y[n + r] = vs[2, r]
+        for j in range(N_WORK):
+            stage_y[2 * n + j] = y[2 * n + j] + h * (RADAU_A[2, 0] * ws[0, j]
+                                                     + RADAU_A[2, 1] * ws[1, j]
+                                                     + RADAU_A[2, 2] * ws[2, j])
+        st = state_status(stage_y, n, md, opts[5])
+        if st != OK:
+            fail_y[:] = stage_y
+            return st, step, t + h
+        v_prev[0] = v0
+        for i in range(3):
+            v_prev[i + 1] = vs[i]
+        ctrl[R_HAVE_PREV] = 1.0
+        y[:] = stage_y
+        ctrl[R_JAC_AGE] = -1.0 if iterations > NEWTON_SLOW else ctrl[R_JAC_AGE] + 1.0
+    return OK, n_steps, t0 + n_steps * h
