@@ -24,6 +24,8 @@ from scipy.integrate import solve_ivp
 from .dynamics import kinetic_energy, potential_energy
 from .errors import (ConstraintError, GpmeError, ModelError, SimulationError,
                      UnstableStepError)
+from .compiled import for_system
+from .compiled_runs import COMPILED_METHODS, run_compiled
 from .gpme import SWITCH_RCOND, partition_rcond
 from .run_cost import estimate_run, time_evaluation
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
@@ -31,7 +33,11 @@ from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jaco
 
 log = logging.getLogger("gpme.integrate")
 
-METHODS = ("RK4", "RK45", "DOP853", "Radau")
+METHODS = ("RK4", "RadauIIA", "RK45", "DOP853", "Radau")
+FIXED_STEP_METHODS = ("RK4", "RadauIIA")
+# s, RadauIIA's step when none is given: resolves motions up to ~30 Hz to about 1e-6 of
+# their amplitude per second of run (order 5; docs/benchmarks.md measures the flexible crane)
+RADAU_IIA_STEP = 1e-3
 IMPLICIT_METHODS = ("Radau",)
 N_WORK = 3
 # |q| or |q_dot| above this means the run has blown up (SI units: m, rad, m/s, rad/s)
@@ -182,6 +188,25 @@ def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None,
     return np.array(ts), np.array(ys)
 
 
+def _run_compiled(method, compiled, partition, t_end, y0, dt, record_every, progress,
+                  max_wall_s):
+    """(times, states, evaluations) of a fixed-step run in the compiled loops, with the
+    errors of the Python path (gpme_core.compiled_runs)."""
+    model, n = partition.system.model, compiled.n
+    bar = Progress(progress, int(round(t_end / dt)), t_end, method)
+
+    def on_error(t_good, y_good, exc):
+        if method == "RK4":
+            _raise_if_unstable(partition, dt, t_good, y_good, n, exc)
+        _raise_with_singular_sets(partition.system, exc)
+    try:
+        return run_compiled(method, compiled, partition, t_end, y0, dt, record_every, bar,
+                            lambda t: _check_wall(bar.start, max_wall_s, t, t_end, method),
+                            lambda t, y, step: _check_state(model, t, y, n, step), on_error)
+    finally:
+        bar.close()
+
+
 def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
     """Re-raise a failed RK4 run as UnstableStepError when dt is above the stability limit at
     the last recorded state before the failure (else leave the original error)."""
@@ -320,7 +345,7 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
 def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
              switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
-             estimate_only=False, max_wall_s=None):
+             estimate_only=False, max_wall_s=None, compiled=True):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
@@ -340,7 +365,13 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     estimate_only: check the inputs and the step, then return the RunCost without running
     max_wall_s : s, stop the run with a SimulationError once it has taken this long (None:
                  no limit); the guard for methods whose cost is not known before the run
-    method     : "RK4" (fixed step) or a solve_ivp method: "RK45", "DOP853", "Radau"
+    method     : "RK4" (fixed step, explicit), "RadauIIA" (fixed step, implicit: three-stage
+                 Radau IIA of order 5, L-stable, for models whose stiff modes (RFEM
+                 torsion) would hold RK4 to tiny steps; dt default RADAU_IIA_STEP, its
+                 accuracy is the step's: halve dt to measure it) or a solve_ivp method:
+                 "RK45", "DOP853", "Radau".  RK4 and RadauIIA run in compiled loops
+                 (gpme_core.kernels) when the system compiles (gpme_core.compiled;
+                 df.attrs["compiled"] and ["compiled_reason"] say), else RK4 runs in Python
     output_dt  : s, spacing of the recorded rows (a multiple of dt for RK4)
     on_manifold: start on the constraints: dependent q and q_dot solved from Phi = 0,
                  Phi_dot = 0 at t = 0 (otherwise start where given, as the paper does)
@@ -348,6 +379,9 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                  gpme_core.gpme.partition_rcond falls below this (default SWITCH_RCOND,
                  see there for the value); None keeps them and stops with a
                  ConstraintError where they become singular
+
+    compiled   : True (default) runs RK4 and RadauIIA in the compiled loops when the system
+                 compiles; False runs RK4 in Python (the reference path; RadauIIA has none)
 
     ``system`` is not changed: without dependent coordinates, the run chooses its own at
     t = 0 by pivoting (``df.attrs["dependent"]``), and every switch happens in the run's
@@ -444,6 +478,17 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
             raise UnstableStepError(unstable_step_message(dt, limit, mode,
                                                           "at the start (t = 0)"))
         dt, record_every = rk4_step_plan(t_end, dt, output_dt)
+    use_compiled = compiled
+    compiled, not_compiled = None, "the method has no compiled loop"
+    if method in COMPILED_METHODS:
+        compiled, not_compiled = (for_system(start_system) if use_compiled else
+                                  (None, "compiled=False"))
+    if method == "RadauIIA":
+        if compiled is None:
+            raise ModelError(f"method 'RadauIIA' runs compiled only, and this system cannot be "
+                             f"compiled: {not_compiled}; use method='Radau' (SciPy) or 'RK4'")
+        dt, record_every = rk4_step_plan(t_end, min(dt or RADAU_IIA_STEP, output_dt, t_end),
+                                         output_dt)
     if before_run is not None or estimate_only:
         if seconds_per_eval is None:
             seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False)[1]
@@ -456,7 +501,10 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
         before_run(cost)
     start = time.perf_counter()
     nfev = None
-    if method == "RK4":
+    if compiled is not None:
+        ts, ys, nfev = _run_compiled(method, compiled, partition, t_end, y0, dt,
+                                     record_every, progress, max_wall_s)
+    elif method == "RK4":
         ts, ys = _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition,
                       max_wall_s)
         nfev = 4 * int(round(t_end / dt))
@@ -470,7 +518,9 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     wall = time.perf_counter() - start
     df = history_frame(start_system, ts, ys, switch_rcond)
     df.attrs.update(model=model.name, method=method, dt=dt,
-                    rtol=None if method == "RK4" else rtol, wall_time_s=wall,
+                    rtol=None if method in FIXED_STEP_METHODS else rtol, wall_time_s=wall,
+                    compiled=compiled is not None,
+                    compiled_reason="" if compiled is not None else not_compiled,
                     rhs_evaluations=nfev, dependent=list(dependent),
                     dependent_final=list(partition.dependent), events=events,
                     switch_rcond=switch_rcond,

@@ -199,25 +199,34 @@ def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
     return True
 
 
+# above this size the reduced matrix is factorised by LAPACK (blocked, faster); below
+# it by the loops here, which cost less than LAPACK's call overhead (measured: equal at
+# about 20, LAPACK 2.3x faster at 150)
+LAPACK_FROM = 24
+
+
 @_jit
 def _cholesky_solve(mat, b):
-    """Solve mat x = b for symmetric positive definite mat (r, r) in place of a copy;
-    returns (x, ok)."""
+    """Solve mat x = b for symmetric positive definite mat (r, r); returns (x, ok)."""
     r = b.shape[0]
-    low = mat.copy()
-    for j in range(r):
-        d = low[j, j]
-        for p in range(j):
-            d -= low[j, p] * low[j, p]
-        if not d > 0.0:
+    if r >= LAPACK_FROM:
+        ok = True
+        for j in range(r):
+            if not mat[j, j] > 0.0:
+                ok = False
+        if not ok:
             return b.copy(), False
-        d = math.sqrt(d)
-        low[j, j] = d
-        for i in range(j + 1, r):
-            s = low[i, j]
-            for p in range(j):
-                s -= low[i, p] * low[j, p]
-            low[i, j] = s / d
+        low = np.empty((r, r))
+        try:
+            low = np.linalg.cholesky(mat)
+        except Exception:  # not positive definite
+            ok = False
+        if not ok:
+            return b.copy(), False
+    else:
+        low = _cholesky_factor(mat)
+        if not low[0, 0] > 0.0 or not math.isfinite(low[r - 1, r - 1]):
+            return b.copy(), False
     x = b.copy()
     for i in range(r):
         s = x[i]
@@ -230,6 +239,29 @@ def _cholesky_solve(mat, b):
             s -= low[p, i] * x[p]
         x[i] = s / low[i, i]
     return x, True
+
+
+@_jit
+def _cholesky_factor(mat):
+    """Lower Cholesky factor of mat (r, r); its [0, 0] is 0 (or NaN) when mat is not
+    positive definite."""
+    r = mat.shape[0]
+    low = mat.copy()
+    for j in range(r):
+        d = low[j, j]
+        for p in range(j):
+            d -= low[j, p] * low[j, p]
+        if not d > 0.0:
+            low[0, 0] = 0.0
+            return low
+        d = math.sqrt(d)
+        low[j, j] = d
+        for i in range(j + 1, r):
+            s = low[i, j]
+            for p in range(j):
+                s -= low[i, p] * low[j, p]
+            low[i, j] = s / d
+    return low
 
 
 @_jit
@@ -300,12 +332,12 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
             a_dc[i, j] = a[i, dc[j]]
     inv, ok = _invert_small(a_dc)
     if not ok:
-        return SINGULAR_PARTITION, 0.0
+        return (SWITCH if switch_below > 0.0 else SINGULAR_PARTITION), 0.0
     rel = partition_rcond(a, dc, inv)
-    if not rel > singular_rcond:
-        return SINGULAR_PARTITION, rel
     if rel < switch_below:
         return SWITCH, rel
+    if not rel > singular_rcond:
+        return SINGULAR_PARTITION, rel
     gam = np.empty((k, ni))                  # Gamma = -A_dc^-1 A_ic
     for i in range(k):
         for j in range(ni):
@@ -313,7 +345,12 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
             for p in range(k):
                 s += inv[i, p] * a[p, ic[j]]
             gam[i, j] = -s
-    p_dc = inv @ c                           # particular solution, dependent part
+    p_dc = np.empty(k)                       # particular solution, dependent part
+    for i in range(k):
+        s = 0.0
+        for p in range(k):
+            s += inv[i, p] * c[p]
+        p_dc[i] = s
     r = rhs.copy()                           # h + Q - M p
     for i in range(n):
         s = 0.0
