@@ -149,7 +149,7 @@ def _simulate(args):
     if args.dt is not None and args.t_end is not None and args.dt > args.t_end:
         return _error(f"--dt {args.dt!r} s is longer than --t-end {args.t_end!r} s; give "
                       "a step no longer than the run")
-    if args.dt is not None and args.method not in (None, "RK4"):
+    if args.dt is not None and args.method not in (None, "RK4", "RadauIIA"):
         print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
               "(its steps follow its error control)", flush=True)
     if args.n_rfe is not None and args.n_rfe < 0:
@@ -242,9 +242,13 @@ def build_parser():
                      help="the model file's quick_t_end (the crane: 2 s)")
     sim.add_argument("--dt", type=float, default=None,
                      help="RK4 step in s (default: the model file's, else half the stability "
-                          "limit; refused above the limit); with an adaptive --method its "
-                          "largest step")
-    sim.add_argument("--method", choices=("RK4", "RK45", "DOP853", "Radau"), default=None)
+                          "limit; refused above the limit); RadauIIA's fixed step (default "
+                          "1 ms); with an adaptive --method its largest step")
+    sim.add_argument("--method", choices=("RK4", "RadauIIA", "RK45", "DOP853", "Radau"),
+                     default=None,
+                     help="RK4 (explicit, fixed step), RadauIIA (implicit order 5, fixed "
+                          "step, default 1 ms: for flexible models whose stiff RFEM modes "
+                          "hold RK4 to tiny steps), or SciPy's adaptive RK45, DOP853, Radau")
     sim.add_argument("--on-manifold", action="store_true",
                      help="built-in crane only: start on the constraints")
     sim.add_argument("--static-arm", action="store_true",

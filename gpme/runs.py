@@ -28,7 +28,8 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
     """History DataFrame of ``scenario`` from its initial state.
 
     t_end  : s, default scenario.t_run(quick)
-    dt     : s, RK4 step, default :func:`resolved_step`
+    dt     : s, RK4 step, default :func:`resolved_step`; RadauIIA's step, default the model
+             file's when it chose RadauIIA, else gpme_core.integrate.RADAU_IIA_STEP
     method : one of gpme_core.integrate.METHODS, default the scenario's integrator; with an
              adaptive method a given dt is its largest step
     before_run, estimate_only, max_wall_s : as gpme_core.integrate.simulate
@@ -38,7 +39,12 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
         raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
     t_end = scenario.t_run(quick) if t_end is None else float(t_end)
     out_dt = output_dt or scenario.output_dt
-    step = resolved_step(scenario, dt) if method == "RK4" else dt
+    if method == "RK4":
+        step = resolved_step(scenario, dt)
+    elif dt is None and method == "RadauIIA" == scenario.integrator:
+        step = scenario.dt           # the model file's RadauIIA step (None: its default)
+    else:
+        step = dt
     df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
                   output_dt=out_dt, progress=progress, dt=step, before_run=before_run,
                   estimate_only=estimate_only, max_wall_s=max_wall_s)

@@ -159,6 +159,15 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
     gacc = np.zeros((4, 4))
     wacc = np.zeros(4)
     y = np.empty((4, 4))
+    # S has a zero last row: the traces run over its first three rows only.  s_rows[e, i]
+    # is entry e = 4 a + c (a < 3) of S_i, so that each m_ij below is a sum over e of
+    # contiguous, vectorisable products (summed in the same order as tr(S_i Y^T)).
+    s_rows = np.empty((12, n))
+    for i in range(n):
+        for a in range(3):
+            for c in range(4):
+                s_rows[4 * a + c, i] = s_all[i, a, c]
+    column = np.empty(n)
     for j in range(n - 1, -1, -1):
         for a in range(4):
             for c in range(4):
@@ -166,14 +175,17 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
             wacc[a] += first[j, a]
         _mm4_acc(b_all[j], hw[j], 1.0, gacc)
         _mm4(s_all[j], hc, y)
-        # S has a zero last row: the traces run over the first three rows only
         for i in range(j + 1):
-            acc = 0.0
-            for a in range(3):
-                for c in range(4):
-                    acc += s_all[i, a, c] * y[a, c]
-            m[i, j] = acc
-            m[j, i] = acc
+            column[i] = 0.0
+        for a in range(3):
+            for c in range(4):
+                yac = y[a, c]
+                row = s_rows[4 * a + c]
+                for i in range(j + 1):
+                    column[i] += row[i] * yac
+        for i in range(j + 1):
+            m[i, j] = column[i]
+            m[j, i] = column[i]
         acc = 0.0
         for a in range(3):
             for c in range(4):

@@ -228,16 +228,18 @@ def _cholesky_solve(mat, b):
         if not low[0, 0] > 0.0 or not math.isfinite(low[r - 1, r - 1]):
             return b.copy(), False
     x = b.copy()
-    for i in range(r):
+    for i in range(r):                       # L w = b
         s = x[i]
+        row = low[i]
         for p in range(i):
-            s -= low[i, p] * x[p]
-        x[i] = s / low[i, i]
-    for i in range(r - 1, -1, -1):
-        s = x[i]
-        for p in range(i + 1, r):
-            s -= low[p, i] * x[p]
-        x[i] = s / low[i, i]
+            s -= row[p] * x[p]
+        x[i] = s / row[i]
+    for i in range(r - 1, -1, -1):           # L^T x = w, by rows of L (axpy form)
+        x[i] /= low[i, i]
+        xi = x[i]
+        row = low[i]
+        for p in range(i):
+            x[p] -= row[p] * xi
     return x, True
 
 
@@ -357,24 +359,30 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
         for p in range(k):
             s += m_mat[i, dc[p]] * p_dc[p]
         r[i] -= s
+    # the loops below run along contiguous rows (axpy form) so that they vectorise
     x = np.empty((n, ni))                    # M N
     for i in range(n):
+        xi = x[i]
+        mi = m_mat[i]
         for j in range(ni):
-            s = m_mat[i, ic[j]]
-            for p in range(k):
-                s += m_mat[i, dc[p]] * gam[p, j]
-            x[i, j] = s
+            xi[j] = mi[ic[j]]
+        for p in range(k):
+            f = mi[dc[p]]
+            gp = gam[p]
+            for j in range(ni):
+                xi[j] += f * gp[j]
     red = np.empty((ni, ni))                 # N^T M N
     b = np.empty(ni)
     for i in range(ni):
-        for j in range(ni):
-            s = x[ic[i], j]
-            for p in range(k):
-                s += gam[p, i] * x[dc[p], j]
-            red[i, j] = s
+        ri = red[i]
+        ri[:] = x[ic[i]]
         s = r[ic[i]]
         for p in range(k):
-            s += gam[p, i] * r[dc[p]]
+            f = gam[p, i]
+            xp = x[dc[p]]
+            for j in range(ni):
+                ri[j] += f * xp[j]
+            s += f * r[dc[p]]
         b[i] = s
     z, ok = _cholesky_solve(red, b)
     if not ok:

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.model import Model
 
-INTEGRATORS = ("RK4", "RK45", "DOP853", "Radau")
+INTEGRATORS = ("RK4", "RadauIIA", "RK45", "DOP853", "Radau")   # gpme_core.integrate.METHODS
 
 
 @dataclass(frozen=True)

@@ -361,10 +361,10 @@ BAD = [
     ("quick-longer", dict(run="[run]\nt_end = 1.0\nquick_t_end = 2.0\n"),
      r"run\.quick_t_end: must be <= t_end = 1\.0 s, got 2\.0"),
     ("integrator-unknown", dict(run='[run]\nt_end = 1.0\nintegrator = "rk4"\n'),
-     r"run\.integrator: 'rk4' is not one of 'RK4', 'RK45', 'DOP853', 'Radau'; did you mean "
+     r"run\.integrator: 'rk4' is not one of 'RK4', 'RadauIIA', 'RK45', 'DOP853', 'Radau'; did you mean "
      r"'RK4'\?"),
     ("dt-with-radau", dict(run='[run]\nt_end = 1.0\nintegrator = "Radau"\ndt = 1e-3\n'),
-     r"run\.dt: is the RK4 step; integrator 'Radau' chooses its own steps"),
+     r"run\.dt: is the RK4 or RadauIIA step; integrator 'Radau' chooses its own steps"),
     # ---- [[tolerance]]
     ("tolerance-no-reason", dict(extra='[[tolerance]]\ncheck = "pinocchio/M"\nabs = 1e-12\n'
                                        'rel = 1e-10\nreason = ""\n'),

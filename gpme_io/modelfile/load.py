@@ -746,16 +746,16 @@ def _run_section(c: _Checker, data: dict) -> Optional[RunSpec]:
     integrator = "RK4"
     if "integrator" in t:
         integrator = c.string(t, "integrator", "run", "the time integrator", choices=INTEGRATORS)
-    dt = c.number(t, "dt", "run", "s, RK4 step", required=False, rule=">0")
+    dt = c.number(t, "dt", "run", "s, RK4 or RadauIIA step", required=False, rule=">0")
     output_dt = c.number(t, "output_dt", "run", "s, spacing of the recorded samples",
                          required=False, rule=">0")
     if t_end is not None:
         for key, v in (("quick_t_end", quick), ("dt", dt), ("output_dt", output_dt)):
             if v is not None and v > t_end:
                 c.add(f"run.{key}", f"must be <= t_end = {t_end!r} s, got {v!r}")
-    if dt is not None and integrator not in (None, "RK4"):
-        c.add("run.dt", f"is the RK4 step; integrator {integrator!r} chooses its own steps "
-              "(remove dt or set integrator = \"RK4\")")
+    if dt is not None and integrator not in (None, "RK4", "RadauIIA"):
+        c.add("run.dt", f"is the RK4 or RadauIIA step; integrator {integrator!r} chooses its "
+              "own steps (remove dt or set integrator = \"RK4\" or \"RadauIIA\")")
     if len(c.problems) > n0:
         return None
     return RunSpec(t_end, quick if quick is not None else min(t_end, QUICK_T_END), integrator,
