@@ -1,0 +1,101 @@
+"""Where the time of one compiled GPME evaluation goes (a profile of gpme_core.kernels).
+
+    python -m benchmarks.kernel_profile [--n-rfe 0 5 20 50]
+
+cProfile cannot see inside compiled code, so each part of gpme_core.kernels.evaluate is
+timed on its own, called in a compiled loop (no Python between calls), on the crane at
+a seeded off-equilibrium state: the chain kinematics (T, S), the trace-form terms (M, h,
+g), the constraint rows (Phi, Phi_dot, A, kappa), the reduced solve (Gamma, N^T M N, its
+Cholesky factor, q_ddot, multipliers), and the whole evaluation.  Microseconds per call,
+best of 5 batches; the parts add up to the whole within the allocations and the spring,
+damper and drive forces.
+"""
+import argparse
+import timeit
+
+import numba
+import numpy as np
+
+from gpme_core import compiled, fast, kernels
+from gpme_examples.crane import crane_system, initial_state
+
+BATCH = 400
+
+
+@numba.njit
+def _loop_chain(count, md, q):
+    for _ in range(count):
+        fast.chain(md[0], md[1], md[2], q)
+
+
+@numba.njit
+def _loop_terms(count, md, t_all, s_all, q_dot):
+    for _ in range(count):
+        fast.terms(t_all, s_all, md[3], md[4], q_dot)
+
+
+@numba.njit
+def _loop_rows(count, t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+    for _ in range(count):
+        kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa)
+
+
+@numba.njit
+def _loop_reduced(count, m_mat, rhs, a, c, ic, dc, q_ddot, lam):
+    for _ in range(count):
+        kernels.reduced_solve(m_mat, rhs, a, c, ic, dc, 0.0, 1e-10, q_ddot, lam)
+
+
+@numba.njit
+def _loop_evaluate(count, t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
+    for _ in range(count):
+        kernels.evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info)
+
+
+def _us(fn, *args):
+    fn(1, *args)                                        # compile
+    return 1e6 * min(timeit.repeat(lambda: fn(BATCH, *args), number=1, repeat=5)) / BATCH
+
+
+def profile(n_rfe, t=0.37, seed=0):
+    """{part: microseconds} of one evaluation of the crane with n_rfe segments."""
+    system = crane_system(n_rfe)
+    q, q_dot = system.consistent_state(0.0, *initial_state(system.model))
+    q_dot = q_dot + 0.1 * np.random.default_rng(seed).standard_normal(q.size)
+    cs, why = compiled.for_system(system)
+    if cs is None:
+        raise SystemExit(f"not compiled: {why}")
+    md, cd = cs.md, cs.cd
+    t_all, s_all, m_mat, h, g = fast.chain_and_terms(*md[:5], q, q_dot)
+    k, n = system.n_constraints, q.size
+    phi, phi_dot, kappa, a = np.empty(k), np.empty(k), np.empty(k), np.empty((k, n))
+    kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa)
+    c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
+    out = np.empty(n), np.empty(k)
+    return {"n_rfe": n_rfe, "coordinates": n,
+            "chain T, S": _us(_loop_chain, md, q),
+            "terms M, h, g": _us(_loop_terms, md, t_all, s_all, q_dot),
+            "constraint rows": _us(_loop_rows, t, q, q_dot, t_all, s_all, cd, phi, phi_dot,
+                                   a, kappa),
+            "reduced solve": _us(_loop_reduced, m_mat, h - g, a, c, system.ic, system.dc, *out),
+            "whole evaluate": _us(_loop_evaluate, t, q, q_dot, md, cd, cs.options(),
+                                  system.ic, system.dc, *out, np.empty(kernels.INFO_SIZE))}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
+    args = parser.parse_args(argv)
+    rows = [profile(n) for n in args.n_rfe]
+    keys = list(rows[0])
+    print("| " + " | ".join(keys) + " |")
+    print("|" + "---|" * len(keys))
+    for r in rows:
+        print("| " + " | ".join(f"{r[k]:.1f}" if isinstance(r[k], float) else str(r[k])
+                                for k in keys) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
