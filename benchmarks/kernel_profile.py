@@ -36,20 +36,23 @@ def _loop_terms(count, md, t_all, s_all, q_dot):
 
 @numba.njit
 def _loop_rows(count, t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+    ws = np.empty(kernels.rows_scratch_size(q.shape[0], cd[4].shape[0]))
     for _ in range(count):
-        kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa)
+        kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws)
 
 
 @numba.njit
 def _loop_reduced(count, m_mat, rhs, a, c, ic, dc, q_ddot, lam):
+    ws = np.empty(kernels.reduced_scratch_size(q_ddot.shape[0], dc.shape[0]))
     for _ in range(count):
-        kernels.reduced_solve(m_mat, rhs, a, c, ic, dc, 0.0, 1e-10, q_ddot, lam)
+        kernels.reduced_solve(m_mat, rhs, a, c, ic, dc, 0.0, 1e-10, q_ddot, lam, ws)
 
 
 @numba.njit
 def _loop_evaluate(count, t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
+    ws = np.empty(kernels.workspace_size(q.shape[0], dc.shape[0], cd[4].shape[0]))
     for _ in range(count):
-        kernels.evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info)
+        kernels.evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws)
 
 
 def _us(fn, *args):
@@ -69,7 +72,8 @@ def profile(n_rfe, t=0.37, seed=0):
     t_all, s_all, m_mat, h, g = fast.chain_and_terms(*md[:5], q, q_dot)
     k, n = system.n_constraints, q.size
     phi, phi_dot, kappa, a = np.empty(k), np.empty(k), np.empty(k), np.empty((k, n))
-    kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa)
+    kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa,
+                            np.empty(kernels.rows_scratch_size(n, cd[4].shape[0])))
     c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
     out = np.empty(n), np.empty(k)
     return {"n_rfe": n_rfe, "coordinates": n,

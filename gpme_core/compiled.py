@@ -260,8 +260,13 @@ class CompiledSystem:
         info = np.empty(kernels.INFO_SIZE)
         status = fast.run(self.module.evaluate, float(t), np.asarray(q, dtype=float),
                           np.asarray(q_dot, dtype=float), self.md, self.cd,
-                          self.options(switch_below), ic, dc, q_ddot, lam, info)
+                          self.options(switch_below), ic, dc, q_ddot, lam, info,
+                          self.workspace())
         return status, q_ddot, lam, info
+
+    def workspace(self):
+        """A fresh float workspace for gpme_core.kernels.evaluate."""
+        return np.empty(self.module.workspace_size(self.n, self.m, self.cd[4].shape[0]))
 
     def accelerator(self, ic, dc):
         """A function (t, q, q_dot) -> q_ddot (n,) for a fixed partition, its buffers
@@ -269,9 +274,10 @@ class CompiledSystem:
         status when an evaluation fails."""
         evaluate, md, cd, opts = self.module.evaluate, self.md, self.cd, self.options()
         q_ddot, lam, info = np.empty(self.n), np.empty(self.m), np.empty(kernels.INFO_SIZE)
+        ws = self.workspace()
 
         def accelerations(t, q, q_dot):
-            status = evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info)
+            status = evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws)
             if status != kernels.OK:
                 raise RuntimeError(f"compiled evaluation failed with status {status}")
             return q_ddot

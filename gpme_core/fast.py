@@ -81,15 +81,23 @@ def chain(origins, generators, is_revolute, q):
     """(T, S): world transforms T^(l) and world twist matrices S_l = T^(l) Q_l T^(l)^-1."""
     n = q.shape[0]
     t_all = np.empty((n, 4, 4))
-    s_all = np.zeros((n, 4, 4))
-    acc = np.eye(4)
-    motion = np.empty((4, 4))
-    local = np.empty((4, 4))
+    s_all = np.empty((n, 4, 4))
+    chain_into(origins, generators, is_revolute, q, t_all, s_all, np.empty((2, 4, 4)))
+    return t_all, s_all
+
+
+@_jit
+def chain_into(origins, generators, is_revolute, q, t_all, s_all, scratch):
+    """:func:`chain` into t_all, s_all (n, 4, 4); scratch (2, 4, 4) work space."""
+    n = q.shape[0]
+    motion = scratch[0]
+    local = scratch[1]
     for k in range(n):
         g = generators[k]
         for i in range(4):
             for j in range(4):
                 motion[i, j] = 1.0 if i == j else 0.0
+                s_all[k, i, j] = 0.0
         if is_revolute[k]:
             # Rodrigues: R = I + sin K + (1 - cos) K^2, K = skew(axis)
             s, c = np.sin(q[k]), np.cos(q[k])
@@ -101,7 +109,10 @@ def chain(origins, generators, is_revolute, q):
             for i in range(3):
                 motion[i, 3] = g[i, 3] * q[k]
         _mm4(origins[k], motion, local)
-        _mm4(acc, local, t_all[k])
+        if k == 0:
+            t_all[0, :, :] = local
+        else:
+            _mm4(t_all[k - 1], local, t_all[k])
         acc = t_all[k]
         if is_revolute[k]:
             # S = [[W, -W p], [0, 0]],  W = R K R^T
@@ -118,16 +129,39 @@ def chain(origins, generators, is_revolute, q):
         else:
             for i in range(3):
                 s_all[k, i, 3] = acc[i, 0] * g[0, 3] + acc[i, 1] * g[1, 3] + acc[i, 2] * g[2, 3]
-    return t_all, s_all
 
 
 @_jit
 def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
     """(M (n, n), h (n,), g (n,)) in trace form with composite world pseudo-inertias."""
     n = q_dot.shape[0]
-    hw = np.empty((n, 4, 4))
-    first = np.empty((n, 4))
-    th = np.empty((4, 4))
+    m = np.empty((n, n))
+    h = np.empty(n)
+    g = np.empty(n)
+    terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g,
+               np.empty(terms_scratch_size(n)))
+    return m, h, g
+
+
+@_jit
+def terms_scratch_size(n):
+    """Length of the float scratch of :func:`terms_into` for n coordinates."""
+    return 2 * 16 * n + 4 * n + 12 * n + n + 7 * 16 + 4
+
+
+@_jit
+def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
+    """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),)."""
+    n = q_dot.shape[0]
+    hw = scratch[:16 * n].reshape((n, 4, 4))
+    b_all = scratch[16 * n:32 * n].reshape((n, 4, 4))
+    first = scratch[32 * n:36 * n].reshape((n, 4))
+    s_rows = scratch[36 * n:48 * n].reshape((12, n))
+    column = scratch[48 * n:49 * n]
+    small = scratch[49 * n:49 * n + 7 * 16].reshape((7, 4, 4))
+    wacc = scratch[49 * n + 7 * 16:49 * n + 7 * 16 + 4]
+    th, v_prev, b_prev, tmp, hc, gacc, y = (small[0], small[1], small[2], small[3],
+                                            small[4], small[5], small[6])
     for l in range(n):
         _mm4(t_all[l], pseudo_inertias[l], th)
         tl = t_all[l]
@@ -138,10 +172,13 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
             first[l, i] = th[i, 3]
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
     # B_l = B_{l-1} + (2 V_{l-1} + S_l qd_l) S_l qd_l
-    b_all = np.empty((n, 4, 4))
-    v_prev = np.zeros((4, 4))
-    b_prev = np.zeros((4, 4))
-    tmp = np.empty((4, 4))
+    for i in range(4):
+        wacc[i] = 0.0
+        for j in range(4):
+            v_prev[i, j] = 0.0
+            b_prev[i, j] = 0.0
+            hc[i, j] = 0.0
+            gacc[i, j] = 0.0
     for l in range(n):
         w = q_dot[l]
         for i in range(4):
@@ -152,22 +189,13 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
         for i in range(4):
             for j in range(4):
                 v_prev[i, j] += s_all[l, i, j] * w
-    m = np.empty((n, n))
-    h = np.empty(n)
-    g = np.empty(n)
-    hc = np.zeros((4, 4))
-    gacc = np.zeros((4, 4))
-    wacc = np.zeros(4)
-    y = np.empty((4, 4))
     # S has a zero last row: the traces run over its first three rows only.  s_rows[e, i]
     # is entry e = 4 a + c (a < 3) of S_i, so that each m_ij below is a sum over e of
     # contiguous, vectorisable products (summed in the same order as tr(S_i Y^T)).
-    s_rows = np.empty((12, n))
     for i in range(n):
         for a in range(3):
             for c in range(4):
                 s_rows[4 * a + c, i] = s_all[i, a, c]
-    column = np.empty(n)
     for j in range(n - 1, -1, -1):
         for a in range(4):
             for c in range(4):
@@ -198,27 +226,45 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
                 sw += s_all[j, a, c] * wacc[c]
             gj += gamma[a] * sw
         g[j] = -gj
-    return m, h, g
 
 
 @_jit
 def point(t_all, s_all, q_dot, link, r_local):
     """(position (3,), velocity (3,), jacobian (3, n), drift (3,)) of a point fixed on link."""
     n = q_dot.shape[0]
-    r = np.empty(4)
-    r[:3] = r_local
-    r[3] = 1.0
-    rw = np.zeros(4)
+    pos, vel, drift = np.empty(3), np.empty(3), np.empty(3)
+    jac = np.empty((3, n))
+    point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, np.empty(POINT_SCRATCH))
+    return pos, vel, jac, drift
+
+
+POINT_SCRATCH = 28          # floats of point_into's scratch: rw (4), col (4), v_prev (4, 4), r (4)
+
+
+@_jit
+def point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, scratch):
+    """:func:`point` into pos (3,), vel (3,), jac (3, n), drift (3,); scratch (POINT_SCRATCH,)."""
+    n = q_dot.shape[0]
+    rw = scratch[0:4]
+    col = scratch[4:8]
+    v_prev = scratch[8:24].reshape((4, 4))
+    r = scratch[24:28]
+    r[0], r[1], r[2], r[3] = r_local[0], r_local[1], r_local[2], 1.0
     for i in range(4):
+        acc = 0.0
         for c in range(4):
-            rw[i] += t_all[link, i, c] * r[c]
-    jac = np.zeros((3, n))
+            acc += t_all[link, i, c] * r[c]
+        rw[i] = acc
+    for a in range(3):
+        vel[a] = 0.0
+        drift[a] = 0.0
+        for j in range(link + 1, n):
+            jac[a, j] = 0.0
+    for a in range(4):
+        for c in range(4):
+            v_prev[a, c] = 0.0
     # p_dot = sum S_i qd_i r_w;  drift = B r_w with B from the recursion, applied to r_w
     # directly: B r_w = sum_l (2 V_{l-1} + S_l qd_l) S_l qd_l r_w
-    vel = np.zeros(3)
-    drift = np.zeros(3)
-    v_prev = np.zeros((4, 4))
-    col = np.empty(4)
     for l in range(link + 1):
         for a in range(4):
             acc = 0.0
@@ -238,7 +284,8 @@ def point(t_all, s_all, q_dot, link, r_local):
             for a in range(4):
                 for c in range(4):
                     v_prev[a, c] += s_all[l, a, c] * w
-    return rw[:3].copy(), vel, jac, drift
+    for a in range(3):
+        pos[a] = rw[a]
 
 
 @_jit

@@ -39,7 +39,7 @@ import math
 
 import numpy as np
 
-from .fast import _jit, chain, point, terms
+from .fast import POINT_SCRATCH, _jit, chain_into, point_into, terms_into, terms_scratch_size
 
 # ---------------------------------------------------------------- status codes
 OK = 0
@@ -152,21 +152,25 @@ def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
 
 
 @_jit
-def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws):
     """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
-    value is not finite."""
+    value is not finite.  ws: float scratch of rows_scratch_size(n, n_points)."""
     c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par = cd[:9]
     m = c_kind.shape[0]
     n = q.shape[0]
     n_points = p_link.shape[0]
-    pos = np.empty((n_points, 3))
-    vel = np.empty((n_points, 3))
-    drift = np.empty((n_points, 3))
-    jac = np.empty((n_points, 3, n))
+    pos = ws[:3 * n_points].reshape((n_points, 3))
+    vel = ws[3 * n_points:6 * n_points].reshape((n_points, 3))
+    drift = ws[6 * n_points:9 * n_points].reshape((n_points, 3))
+    used = 9 * n_points
+    jac = ws[used:used + 3 * n * n_points].reshape((n_points, 3, n))
+    used += 3 * n * n_points
+    lt = ws[used:used + 18]
+    tf = ws[used + 18:used + 21]
+    scratch = ws[used + 21:used + 21 + POINT_SCRATCH]
     for k in range(n_points):
-        pos[k], vel[k], jac[k], drift[k] = point(t_all, s_all, q_dot, p_link[k], p_r[k])
-    lt = np.empty(18)
-    tf = np.empty(3)
+        point_into(t_all, s_all, q_dot, p_link[k], p_r[k], pos[k], vel[k], jac[k], drift[k],
+                   scratch)
     for c in range(m):
         kind = c_kind[c]
         if kind == C_JOINT:
@@ -199,6 +203,12 @@ def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
     return True
 
 
+@_jit
+def rows_scratch_size(n, n_points):
+    """Length of the float scratch of :func:`constraint_rows`."""
+    return 9 * n_points + 3 * n * n_points + 21 + POINT_SCRATCH
+
+
 # above this size the reduced matrix is factorised by LAPACK (blocked, faster); below
 # it by the loops here, which cost less than LAPACK's call overhead (measured: equal at
 # about 20, LAPACK 2.3x faster at 150)
@@ -206,30 +216,25 @@ LAPACK_FROM = 24
 
 
 @_jit
-def _cholesky_solve(mat, b):
-    """Solve mat x = b for symmetric positive definite mat (r, r); returns (x, ok)."""
+def _cholesky_solve(mat, b, low, x):
+    """x (r,) = mat^-1 b for symmetric positive definite mat (r, r); low (r, r) scratch for
+    the factor (LAPACK's own above LAPACK_FROM); False when mat is not positive definite."""
     r = b.shape[0]
     if r >= LAPACK_FROM:
-        ok = True
         for j in range(r):
             if not mat[j, j] > 0.0:
-                ok = False
-        if not ok:
-            return b.copy(), False
-        low = np.empty((r, r))
+                return False
+        ok = True
         try:
             low = np.linalg.cholesky(mat)
         except Exception:  # not positive definite
             ok = False
         if not ok:
-            return b.copy(), False
-    else:
-        low = _cholesky_factor(mat)
-        if not low[0, 0] > 0.0 or not math.isfinite(low[r - 1, r - 1]):
-            return b.copy(), False
-    x = b.copy()
+            return False
+    elif not _cholesky_factor(mat, low):
+        return False
     for i in range(r):                       # L w = b
-        s = x[i]
+        s = b[i]
         row = low[i]
         for p in range(i):
             s -= row[p] * x[p]
@@ -240,45 +245,48 @@ def _cholesky_solve(mat, b):
         row = low[i]
         for p in range(i):
             x[p] -= row[p] * xi
-    return x, True
+    return True
 
 
 @_jit
-def _cholesky_factor(mat):
-    """Lower Cholesky factor of mat (r, r); its [0, 0] is 0 (or NaN) when mat is not
-    positive definite."""
+def _cholesky_factor(mat, low):
+    """Lower Cholesky factor of mat (r, r) into low (its upper part is not used); False when
+    mat is not positive definite."""
     r = mat.shape[0]
-    low = mat.copy()
     for j in range(r):
-        d = low[j, j]
+        d = mat[j, j]
+        row_j = low[j]
         for p in range(j):
-            d -= low[j, p] * low[j, p]
+            d -= row_j[p] * row_j[p]
         if not d > 0.0:
-            low[0, 0] = 0.0
-            return low
+            return False
         d = math.sqrt(d)
-        low[j, j] = d
+        row_j[j] = d
         for i in range(j + 1, r):
-            s = low[i, j]
+            row_i = low[i]
+            s = mat[i, j]
             for p in range(j):
-                s -= low[i, p] * low[j, p]
-            low[i, j] = s / d
-    return low
+                s -= row_i[p] * row_j[p]
+            row_i[j] = s / d
+    return True
 
 
 @_jit
-def _invert_small(a_dc):
-    """(inverse, ok) of a small square matrix by Gauss-Jordan with partial pivoting."""
+def _invert_small(a_dc, work, inv):
+    """inv = a_dc^-1 for a small square matrix, by Gauss-Jordan with partial pivoting;
+    work: scratch of the same shape; False when a_dc is singular."""
     k = a_dc.shape[0]
-    work = a_dc.copy()
-    inv = np.eye(k)
+    for i in range(k):
+        for j in range(k):
+            work[i, j] = a_dc[i, j]
+            inv[i, j] = 1.0 if i == j else 0.0
     for col in range(k):
         piv = col
         for r in range(col + 1, k):
             if abs(work[r, col]) > abs(work[piv, col]):
                 piv = r
         if work[piv, col] == 0.0:
-            return inv, False
+            return False
         if piv != col:
             for c in range(k):
                 work[col, c], work[piv, c] = work[piv, c], work[col, c]
@@ -294,7 +302,7 @@ def _invert_small(a_dc):
                     for c in range(k):
                         work[r, c] -= f * work[col, c]
                         inv[r, c] -= f * inv[col, c]
-    return inv, True
+    return True
 
 
 @_jit
@@ -321,18 +329,42 @@ def partition_rcond(a, dc, inv):
 
 
 @_jit
-def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot, lam):
+def reduced_scratch_size(n, k):
+    """Length of the float scratch of :func:`reduced_solve` for n coordinates, k constraints."""
+    ni = n - k
+    return 3 * k * k + k * ni + k + n + n * ni + 2 * ni * ni + 2 * ni
+
+
+@_jit
+def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot, lam, ws):
     """(status, partition rcond): q_ddot (n,) and multipliers lam (m,) of the reduced GPME
     (module docstring) for the partition (ic, dc); status SWITCH before solving when the
-    partition rcond < switch_below."""
+    partition rcond < switch_below.  ws: float scratch of reduced_scratch_size(n, m)."""
     n = m_mat.shape[0]
     k = dc.shape[0]
     ni = ic.shape[0]
-    a_dc = np.empty((k, k))
+    a_dc = ws[:k * k].reshape((k, k))
+    work = ws[k * k:2 * k * k].reshape((k, k))
+    inv = ws[2 * k * k:3 * k * k].reshape((k, k))
+    used = 3 * k * k
+    gam = ws[used:used + k * ni].reshape((k, ni))          # Gamma = -A_dc^-1 A_ic
+    used += k * ni
+    p_dc = ws[used:used + k]                 # particular solution, dependent part
+    used += k
+    r = ws[used:used + n]                    # h + Q - M p
+    used += n
+    x = ws[used:used + n * ni].reshape((n, ni))            # M N
+    used += n * ni
+    red = ws[used:used + ni * ni].reshape((ni, ni))        # N^T M N
+    used += ni * ni
+    low = ws[used:used + ni * ni].reshape((ni, ni))        # its Cholesky factor
+    used += ni * ni
+    b = ws[used:used + ni]
+    z = ws[used + ni:used + 2 * ni]
     for i in range(k):
         for j in range(k):
             a_dc[i, j] = a[i, dc[j]]
-    inv, ok = _invert_small(a_dc)
+    ok = _invert_small(a_dc, work, inv)
     if not ok:
         return (SWITCH if switch_below > 0.0 else SINGULAR_PARTITION), 0.0
     rel = partition_rcond(a, dc, inv)
@@ -340,27 +372,24 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
         return SWITCH, rel
     if not rel > singular_rcond:
         return SINGULAR_PARTITION, rel
-    gam = np.empty((k, ni))                  # Gamma = -A_dc^-1 A_ic
     for i in range(k):
         for j in range(ni):
             s = 0.0
             for p in range(k):
                 s += inv[i, p] * a[p, ic[j]]
             gam[i, j] = -s
-    p_dc = np.empty(k)                       # particular solution, dependent part
     for i in range(k):
         s = 0.0
         for p in range(k):
             s += inv[i, p] * c[p]
         p_dc[i] = s
-    r = rhs.copy()                           # h + Q - M p
     for i in range(n):
+        r[i] = rhs[i]
         s = 0.0
         for p in range(k):
             s += m_mat[i, dc[p]] * p_dc[p]
         r[i] -= s
     # the loops below run along contiguous rows (axpy form) so that they vectorise
-    x = np.empty((n, ni))                    # M N
     for i in range(n):
         xi = x[i]
         mi = m_mat[i]
@@ -371,8 +400,6 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
             gp = gam[p]
             for j in range(ni):
                 xi[j] += f * gp[j]
-    red = np.empty((ni, ni))                 # N^T M N
-    b = np.empty(ni)
     for i in range(ni):
         ri = red[i]
         ri[:] = x[ic[i]]
@@ -384,8 +411,7 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
                 ri[j] += f * xp[j]
             s += f * r[dc[p]]
         b[i] = s
-    z, ok = _cholesky_solve(red, b)
-    if not ok:
+    if not _cholesky_solve(red, b, low, z):
         return SINGULAR_REDUCED, rel
     for i in range(ni):
         q_ddot[ic[i]] = z[i]
@@ -406,52 +432,79 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
 
 
 @_jit
-def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
+def workspace_size(n, k, n_points):
+    """Length of the float workspace of :func:`evaluate` (n coordinates, k constraints,
+    n_points distinct constrained points)."""
+    return (32 * n + 32 + terms_scratch_size(n) + n * n + 3 * n + 3 + 5 * k + k * n
+            + rows_scratch_size(n, n_points) + reduced_scratch_size(n, k))
+
+
+@_jit
+def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     """Status of one evaluation at (t s, q (n,), q_dot (n,)); fills q_ddot (n,), lam (m,)
     and info (INFO_SIZE,) = (partition rcond, q_dot.d (W), q_dot.t (W), q_dot.A^T lam (W),
-    0)."""
+    0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
     origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping = md[:8]
     d_coord, d_fun = cd[9], cd[10]
     f_kind, f_off, f_par = cd[6], cd[7], cd[8]
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
     n = q.shape[0]
-    t_all, s_all = chain(origins, generators, is_revolute, q)
-    m_mat, h, g = terms(t_all, s_all, pseudo, gamma, q_dot)
-    drive = np.zeros(n)
-    tf = np.empty(3)
-    for i in range(d_coord.shape[0]):
-        time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
-        drive[d_coord[i]] += tf[0]
-    rhs = np.empty(n)
+    k = dc.shape[0]
+    n_points = cd[4].shape[0]
+    t_all = ws[:16 * n].reshape((n, 4, 4))
+    s_all = ws[16 * n:32 * n].reshape((n, 4, 4))
+    used = 32 * n
+    chain_into(origins, generators, is_revolute, q, t_all, s_all,
+               ws[used:used + 32].reshape((2, 4, 4)))
+    used += 32
+    size = terms_scratch_size(n)
+    terms_scratch = ws[used:used + size]
+    used += size
+    m_mat = ws[used:used + n * n].reshape((n, n))
+    used += n * n
+    h = ws[used:used + n]
+    g = ws[used + n:used + 2 * n]
+    rhs = ws[used + 2 * n:used + 3 * n]
+    tf = ws[used + 3 * n:used + 3 * n + 3]
+    used += 3 * n + 3
+    terms_into(t_all, s_all, pseudo, gamma, q_dot, m_mat, h, g, terms_scratch)
     w_diss, w_drive = 0.0, 0.0
     for i in range(n):
         d_i = damping[i] * q_dot[i]
-        rhs[i] = h[i] - g[i] - d_i - stiffness[i] * (q[i] - q_ref[i]) + drive[i]
+        rhs[i] = h[i] - g[i] - d_i - stiffness[i] * (q[i] - q_ref[i])
         if paper_eq7 != 0.0:
             rhs[i] -= d_i
         w_diss += q_dot[i] * d_i
-        w_drive += q_dot[i] * drive[i]
-    info[1], info[2], info[3], info[4] = w_diss, w_drive, 0.0, 0.0
+    for i in range(d_coord.shape[0]):
+        time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
+        rhs[d_coord[i]] += tf[0]
+        w_drive += q_dot[d_coord[i]] * tf[0]
+    info[0], info[1], info[2], info[3], info[4] = 1.0, w_diss, w_drive, 0.0, 0.0
     if not (math.isfinite(w_drive)):
         return NOT_FINITE
-    k = dc.shape[0]
+    phi = ws[used:used + k]
+    phi_dot = ws[used + k:used + 2 * k]
+    kappa = ws[used + 2 * k:used + 3 * k]
+    c = ws[used + 3 * k:used + 4 * k]
+    used += 5 * k
+    a = ws[used:used + k * n].reshape((k, n))
+    used += k * n
+    size = rows_scratch_size(n, n_points)
+    rows_scratch = ws[used:used + size]
+    used += size
+    reduced_scratch = ws[used:used + reduced_scratch_size(n, k)]
     if k == 0:
-        x, ok = _cholesky_solve(m_mat, rhs)
-        q_ddot[:] = x
-        info[0] = 1.0
+        low = reduced_scratch[n:n + n * n].reshape((n, n))
+        ok = _cholesky_solve(m_mat, rhs, low, q_ddot)
         return OK if ok else SINGULAR_REDUCED
-    phi = np.empty(k)
-    phi_dot = np.empty(k)
-    kappa = np.empty(k)
-    a = np.empty((k, n))
-    if not constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+    if not constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa,
+                           rows_scratch):
         return NOT_FINITE
-    c = np.empty(k)
     for i in range(k):
         c[i] = -kappa[i] - 2.0 * alpha * phi_dot[i] - beta * beta * phi[i]
     status, rel = reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond,
-                                q_ddot, lam)
+                                q_ddot, lam, reduced_scratch)
     info[0] = rel
     if status != OK:
         return status
@@ -479,13 +532,13 @@ def state_status(y, n, md, limit):
 
 
 @_jit
-def derivative(t, y, md, cd, opts, ic, dc, dy, lam, info):
-    """dy = (q_dot, q_ddot, W rates) of the integrated state y (2 n + 3,); status."""
+def derivative(t, y, md, cd, opts, ic, dc, dy, lam, info, ws):
+    """dy = (q_dot, q_ddot, W rates) of the integrated state y (2 n + 3,); status.
+    ws: the workspace of :func:`evaluate`."""
     n = md[0].shape[0]
-    q_ddot = np.empty(n)
-    status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, q_ddot, lam, info)
+    q_ddot = dy[n:2 * n]
+    status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, q_ddot, lam, info, ws)
     dy[:n] = y[n:2 * n]
-    dy[n:2 * n] = q_ddot
     dy[2 * n], dy[2 * n + 1], dy[2 * n + 2] = info[1], info[2], info[3]
     return status
 
@@ -503,27 +556,28 @@ def rk4_advance(t0, y, dt, n_steps, md, cd, opts, ic, dc, fail_y):
     stage = np.empty(size)
     lam = np.empty(dc.shape[0])
     info = np.empty(INFO_SIZE)
+    ws = np.empty(workspace_size(n, dc.shape[0], cd[4].shape[0]))
     for step in range(n_steps):
         t = t0 + step * dt
-        st = derivative(t, y, md, cd, opts, ic, dc, k1, lam, info)
+        st = derivative(t, y, md, cd, opts, ic, dc, k1, lam, info, ws)
         if st != OK:
             fail_y[:] = y
             return st, step, t
         for i in range(size):
             stage[i] = y[i] + 0.5 * dt * k1[i]
-        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k2, lam, info)
+        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k2, lam, info, ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + 0.5 * dt
         for i in range(size):
             stage[i] = y[i] + 0.5 * dt * k2[i]
-        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k3, lam, info)
+        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k3, lam, info, ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + 0.5 * dt
         for i in range(size):
             stage[i] = y[i] + dt * k3[i]
-        st = derivative(t + dt, stage, md, cd, opts, ic, dc, k4, lam, info)
+        st = derivative(t + dt, stage, md, cd, opts, ic, dc, k4, lam, info, ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + dt
@@ -582,7 +636,8 @@ def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
     out = np.empty(n)
     lam = np.empty(k)
     info = np.empty(INFO_SIZE)
-    st = evaluate(t, q, v, md, cd, opts_fd, ic, dc, base, lam, info)
+    ws = np.empty(workspace_size(n, k, cd[4].shape[0]))
+    st = evaluate(t, q, v, md, cd, opts_fd, ic, dc, base, lam, info, ws)
     if st != OK:
         return st
     qp = q.copy()
@@ -591,7 +646,7 @@ def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
     for j in range(n):
         dq = root_eps * max(1.0, abs(q[j]))
         qp[j] = q[j] + dq
-        st = evaluate(t, qp, v, md, cd, opts_fd, ic, dc, out, lam, info)
+        st = evaluate(t, qp, v, md, cd, opts_fd, ic, dc, out, lam, info, ws)
         qp[j] = q[j]
         if st != OK:
             return st
@@ -599,7 +654,7 @@ def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
             jq[i, j] = (out[i] - base[i]) / dq
         dv = root_eps * max(1.0, abs(v[j]))
         vp[j] = v[j] + dv
-        st = evaluate(t, q, vp, md, cd, opts_fd, ic, dc, out, lam, info)
+        st = evaluate(t, q, vp, md, cd, opts_fd, ic, dc, out, lam, info, ws)
         vp[j] = v[j]
         if st != OK:
             return st
@@ -665,6 +720,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
     info = np.empty(INFO_SIZE)
     q_ddot = np.empty(n)
     stage_y = np.empty(size)
+    ws = np.empty(workspace_size(n, k, cd[4].shape[0]))
     tol = ctrl[R_NEWTON_TOL]
     for step in range(n_steps):
         t = t0 + step * h
@@ -710,7 +766,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
                         qs[i, r] = q0[r] + h * (RADAU_A[i, 0] * vs[0, r] + RADAU_A[i, 1] * vs[1, r]
                                                 + RADAU_A[i, 2] * vs[2, r])
                     st = evaluate(t + RADAU_C[i] * h, qs[i], vs[i], md, cd, opts, ic, dc,
-                                  q_ddot, lam, info)
+                                  q_ddot, lam, info, ws)
                     ctrl[R_EVALUATIONS] += 1
                     if st != OK:
                         stage_y[:n] = qs[i]
