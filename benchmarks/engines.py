@@ -1,6 +1,9 @@
 """The same constrained-acceleration evaluation and the same 10 s run in three engines.
 
-* gpme      : ProgrammedMotion.solve (reduced GPME, trace form, compiled kernels)
+* gpme      : the compiled right-hand side (gpme_core.compiled.CompiledSystem.accelerator:
+              kinematics, trace-form terms, constraint rows and the reduced solve in one
+              compiled call) and the Python path ProgrammedMotion.solve (the reference);
+              runs through gpme_core.integrate.simulate
 * pinocchio : Pinocchio called from Python: forward kinematics with a = 0, the frame
               Jacobian and classical acceleration of E, the constraint rows formed from
               them with gpme's constraint functions (phi, grad, Hessian: plain numpy on
@@ -12,6 +15,7 @@ import time
 
 import mujoco
 import numpy as np
+import pandas as pd
 import pinocchio as pin
 
 from crosscheck.mujoco import mechanism as mech
@@ -59,6 +63,12 @@ class PinocchioConstrained:
         tau = self.ps.applied_forces(q, qd, s.model.drive_forces(t))
         return pin.forwardDynamics(pm, data, q, qd, tau, a, gamma)
 
+    def mass_matrix(self, q):
+        """(n, n) kg, kg m, kg m^2: the joint-space mass matrix from Pinocchio's CRBA (which
+        fills the upper triangle only; mirrored here)."""
+        upper = np.triu(pin.crba(self.pm, self.data, np.asarray(q, dtype=float)))
+        return upper + np.triu(upper, 1).T
+
 
 def rk4_run(accelerations, t_end, q0, qd0, dt, output_dt=1e-2):
     """Classical RK4 of q_ddot = accelerations(t, q, q_dot).
@@ -86,6 +96,19 @@ def rk4_run(accelerations, t_end, q0, qd0, dt, output_dt=1e-2):
             times.append((k + 1) * h)
             history.append(q.copy())
     return np.array(times), np.array(history), time.perf_counter() - start
+
+
+def pinocchio_run(system, t_end, q0, qd0, dt, output_dt=1e-2):
+    """RK4 run of :class:`PinocchioConstrained` (Python loop).
+
+    Returns a DataFrame with columns t (s) and every coordinate of system.model (SI,
+    recorded every output_dt), attrs["wall_time_s"] the loop's wall time (s)."""
+    accelerations = PinocchioConstrained(system).accelerations
+    times, qs, wall = rk4_run(accelerations, t_end, q0, qd0, dt, output_dt)
+    run = pd.DataFrame(qs, columns=list(system.model.coordinate_names))
+    run.insert(0, "t", times)
+    run.attrs["wall_time_s"] = wall
+    return run
 
 
 def mujoco_programmed(system, dt, timeconst=None):
