@@ -7,8 +7,8 @@ timed on its own, called in a compiled loop (no Python between calls), on the cr
 a seeded off-equilibrium state: the chain kinematics (T, S), the trace-form terms (M, h,
 g), the constraint rows (Phi, Phi_dot, A, kappa), the reduced solve (Gamma, N^T M N, its
 Cholesky factor, q_ddot, multipliers), and the whole evaluation.  Microseconds per call,
-best of 5 batches; the parts add up to the whole within the allocations and the spring,
-damper and drive forces.
+best of 5 batches, LAPACK on one thread as in the compiled runs; the parts add up to the
+whole within the spring, damper and drive forces and the workspace carving.
 """
 import argparse
 import timeit
@@ -91,7 +91,8 @@ def main(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
     args = parser.parse_args(argv)
-    rows = [profile(n) for n in args.n_rfe]
+    with compiled.single_threaded_blas():      # as in the compiled runs
+        rows = [profile(n) for n in args.n_rfe]
     keys = list(rows[0])
     print("| " + " | ".join(keys) + " |")
     print("|" + "---|" * len(keys))

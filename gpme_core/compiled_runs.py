@@ -9,6 +9,7 @@ the messages are the same as on the Python path.
 import numpy as np
 
 from . import kernels
+from .compiled import single_threaded_blas
 from .errors import ConstraintError, SimulationError
 from .gpme import partition_rcond
 
@@ -59,29 +60,30 @@ def run_compiled(method, compiled, partition, t_end, y0, dt, record_every, bar,
     work = radau_work(n) if method == "RadauIIA" else None
     switch_below = partition.switch_below
     step = 0
-    try:
-        while step < n_steps:
-            chunk = min(record_every - step % record_every, n_steps - step)
-            system = partition.system
-            args = (step * dt, y, dt, chunk, compiled.md, compiled.cd,
-                    compiled.options(switch_below), system.ic, system.dc)
-            args += (work, fail_y) if work is not None else (fail_y,)
-            status, done, t_fail = advance(*args)
-            step += done
-            if status == kernels.OK:
-                if step % record_every == 0 or step == n_steps:
-                    ts.append(step * dt)
-                    ys.append(y.copy())
-                bar.update(step)
-                wall_check(step * dt)
-            elif status == kernels.SWITCH:
-                switch_below = _switch(partition, t_fail, fail_y, n)
-            else:
-                _raise_status(status, method, partition, t_fail, fail_y, n, dt,
-                              raise_state_error)
-    except (SimulationError, ConstraintError) as exc:
-        on_error(ts[-1], ys[-1], exc)
-        raise
+    with single_threaded_blas():
+        try:
+            while step < n_steps:
+                chunk = min(record_every - step % record_every, n_steps - step)
+                system = partition.system
+                args = (step * dt, y, dt, chunk, compiled.md, compiled.cd,
+                        compiled.options(switch_below), system.ic, system.dc)
+                args += (work, fail_y) if work is not None else (fail_y,)
+                status, done, t_fail = advance(*args)
+                step += done
+                if status == kernels.OK:
+                    if step % record_every == 0 or step == n_steps:
+                        ts.append(step * dt)
+                        ys.append(y.copy())
+                    bar.update(step)
+                    wall_check(step * dt)
+                elif status == kernels.SWITCH:
+                    switch_below = _switch(partition, t_fail, fail_y, n)
+                else:
+                    _raise_status(status, method, partition, t_fail, fail_y, n, dt,
+                                  raise_state_error)
+        except (SimulationError, ConstraintError) as exc:
+            on_error(ts[-1], ys[-1], exc)
+            raise
     evaluations = 4 * n_steps if work is None else int(work[-1][kernels.R_EVALUATIONS])
     return np.array(ts), np.array(ys), evaluations
 
