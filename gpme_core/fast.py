@@ -77,6 +77,24 @@ def _mm4_acc(a, b, scale, out):
 
 
 @_jit
+def _mm3(a, b, out):
+    """out[:3] = (a @ b)[:3] for 4x4 arrays whose last row of ``a`` is zero (twist and
+    velocity-product matrices); out[3] is left as it is (zero in every use here)."""
+    for i in range(3):
+        for j in range(4):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
+
+
+@_jit
+def _mm3_acc(a, b, scale, out):
+    """out[:3] += scale * (a @ b)[:3] for 4x4 arrays, ``a`` with a zero last row."""
+    for i in range(3):
+        for j in range(4):
+            out[i, j] += scale * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+                                  + a[i, 3] * b[3, j])
+
+
+@_jit
 def chain(origins, generators, is_revolute, q):
     """(T, S): world transforms T^(l) and world twist matrices S_l = T^(l) Q_l T^(l)^-1."""
     n = q.shape[0]
@@ -115,14 +133,14 @@ def chain_into(origins, generators, is_revolute, q, t_all, s_all, scratch):
             _mm4(t_all[k - 1], local, t_all[k])
         acc = t_all[k]
         if is_revolute[k]:
-            # S = [[W, -W p], [0, 0]],  W = R K R^T
-            for i in range(3):
-                for j in range(3):
-                    w = 0.0
-                    for a in range(3):
-                        for b in range(3):
-                            w += acc[i, a] * g[a, b] * acc[j, b]
-                    s_all[k, i, j] = w
+            # S = [[W, -W p], [0, 0]],  W = R K R^T = skew(R k): the axis k = (K[2, 1],
+            # K[0, 2], K[1, 0]) turned into the world frame
+            wx = acc[0, 0] * g[2, 1] + acc[0, 1] * g[0, 2] + acc[0, 2] * g[1, 0]
+            wy = acc[1, 0] * g[2, 1] + acc[1, 1] * g[0, 2] + acc[1, 2] * g[1, 0]
+            wz = acc[2, 0] * g[2, 1] + acc[2, 1] * g[0, 2] + acc[2, 2] * g[1, 0]
+            s_all[k, 0, 1], s_all[k, 0, 2] = -wz, wy
+            s_all[k, 1, 0], s_all[k, 1, 2] = wz, -wx
+            s_all[k, 2, 0], s_all[k, 2, 1] = -wy, wx
             for i in range(3):
                 s_all[k, i, 3] = -(s_all[k, i, 0] * acc[0, 3] + s_all[k, i, 1] * acc[1, 3]
                                    + s_all[k, i, 2] * acc[2, 3])
@@ -165,10 +183,13 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
     for l in range(n):
         _mm4(t_all[l], pseudo_inertias[l], th)
         tl = t_all[l]
+        # T H T^T is symmetric: the upper triangle, mirrored
         for i in range(4):
-            for j in range(4):
-                hw[l, i, j] = th[i, 0] * tl[j, 0] + th[i, 1] * tl[j, 1] + th[i, 2] * tl[j, 2] \
+            for j in range(i, 4):
+                v = th[i, 0] * tl[j, 0] + th[i, 1] * tl[j, 1] + th[i, 2] * tl[j, 2] \
                     + th[i, 3] * tl[j, 3]
+                hw[l, i, j] = v
+                hw[l, j, i] = v
             first[l, i] = th[i, 3]
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
     # B_l = B_{l-1} + (2 V_{l-1} + S_l qd_l) S_l qd_l
@@ -184,7 +205,7 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
         for i in range(4):
             for j in range(4):
                 tmp[i, j] = 2.0 * v_prev[i, j] + s_all[l, i, j] * w
-        _mm4_acc(tmp, s_all[l], w, b_prev)
+        _mm3_acc(tmp, s_all[l], w, b_prev)
         b_all[l] = b_prev
         for i in range(4):
             for j in range(4):
@@ -201,8 +222,8 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
             for c in range(4):
                 hc[a, c] += hw[j, a, c]
             wacc[a] += first[j, a]
-        _mm4_acc(b_all[j], hw[j], 1.0, gacc)
-        _mm4(s_all[j], hc, y)
+        _mm3_acc(b_all[j], hw[j], 1.0, gacc)
+        _mm3(s_all[j], hc, y)
         for i in range(j + 1):
             column[i] = 0.0
         for a in range(3):
