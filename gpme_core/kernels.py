@@ -713,7 +713,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
     vs = np.empty((3, n))
     qs = np.empty((3, n))
     fs = np.empty((3, n))
-    ws = np.empty((3, N_WORK))
+    work_rates = np.empty((3, N_WORK))
     predictor = np.empty((3, n))
     res = np.empty(3 * n)
     lam = np.empty(k)
@@ -775,7 +775,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
                         fail_y[:] = stage_y
                         return st, step, t + RADAU_C[i] * h
                     fs[i] = q_ddot
-                    ws[i, 0], ws[i, 1], ws[i, 2] = info[1], info[2], info[3]
+                    work_rates[i, 0], work_rates[i, 1], work_rates[i, 2] = info[1], info[2], info[3]
                 for i in range(3):
                     for r in range(n):
                         res[i * n + r] = vs[i, r] - v0[r] - h * (
@@ -811,9 +811,9 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
                                       + RADAU_A[2, 2] * vs[2, r])
             stage_y[n + r] = vs[2, r]
         for j in range(N_WORK):
-            stage_y[2 * n + j] = y[2 * n + j] + h * (RADAU_A[2, 0] * ws[0, j]
-                                                     + RADAU_A[2, 1] * ws[1, j]
-                                                     + RADAU_A[2, 2] * ws[2, j])
+            stage_y[2 * n + j] = y[2 * n + j] + h * (RADAU_A[2, 0] * work_rates[0, j]
+                                                     + RADAU_A[2, 1] * work_rates[1, j]
+                                                     + RADAU_A[2, 2] * work_rates[2, j])
         st = state_status(stage_y, n, md, opts[5])
         if st != OK:
             fail_y[:] = stage_y
