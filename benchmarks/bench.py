@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.atomic import atomic_save_figure, atomic_write_csv
-from gpme_core.compiled import for_system
+from gpme_core.compiled import for_system, single_threaded_blas
 from gpme_core.constraints import SympyPointConstraint
 from gpme_core.errors import GpmeError
 from gpme_core.gpme import ProgrammedMotion
@@ -468,8 +468,10 @@ def main(argv=None):
           f"{os.cpu_count()} CPUs, Python {platform.python_version()}; {_versions()}")
     print(f"load average at start: {_load():.2f}")
 
-    print("(a) one evaluation of the constrained accelerations")
-    evals, agreement = evaluation_costs(sizes.n_values, sizes.rounds, sizes.min_time)
+    print("(a) one evaluation of the constrained accelerations (BLAS/LAPACK on one thread, "
+          "as in gpme's compiled runs: gpme_core.compiled.single_threaded_blas)")
+    with single_threaded_blas():
+        evals, agreement = evaluation_costs(sizes.n_values, sizes.rounds, sizes.min_time)
     slopes = {col: loglog_slope(evals, *sizes.slope_range, col)
               for col in ("gpme_compiled_us", "sympy_compiled_us", "gpme_python_us",
                           "pinocchio_us", "mujoco_us")}
