@@ -164,7 +164,7 @@ def _straight_line(name, args, exprs, n_out):
     from sympy.printing.pycode import PythonCodePrinter
     printer = PythonCodePrinter({"fully_qualified_modules": True, "standard": "python3"})
     replacements, reduced = sp.cse(list(exprs), symbols=sp.numbered_symbols("_cse"))
-    lines = ["@_jit", f"def {name}({', '.join(str(a) for a in args)}, out):"]
+    lines = ["@_jit_user", f"def {name}({', '.join(str(a) for a in args)}, out):"]
     for sym, sub in replacements:
         lines.append(f"    {sym} = {printer.doprint(sub)}")
     for k, e in enumerate(reduced):
@@ -231,7 +231,7 @@ def generated_kernels(user_points, user_times):
     template = Path(kernels.__file__).read_text(encoding="utf-8")
     head, rest = template.split(_BEGIN, 1)
     _, tail = rest.split(_END, 1)
-    source = (head.replace("from .fast import", "from gpme_core.fast import")
+    source = (head.replace("from .fast import", "from gpme_core.fast import _jit_user,")
               + _BEGIN + "\n\n\n" + user_source(user_points, user_times) + "\n" + _END + tail)
     digest = hashlib.sha256(source.encode("utf-8")).hexdigest()[:20]
     if digest in _MODULES:

@@ -9,7 +9,7 @@ the messages are the same as on the Python path.
 import numpy as np
 
 from . import kernels
-from .compiled import single_threaded_blas
+from .compiled import DIVERGENCE_LIMIT, single_threaded_blas
 from .errors import ConstraintError, SimulationError
 from .gpme import partition_rcond
 
@@ -62,22 +62,32 @@ def run_compiled(method, compiled, partition, t_end, y0, dt, record_every, bar,
     step = 0
     with single_threaded_blas():
         try:
+            after_switch = False
             while step < n_steps:
+                wall_check(step * dt)
                 chunk = min(record_every - step % record_every, n_steps - step)
+                if after_switch:
+                    # the step that asked for the switch is taken with the new partition
+                    # and no further switch (the Python path switches mid-step and goes
+                    # on); otherwise its start could ask to switch back, and so on forever
+                    chunk, below = 1, 0.0
+                else:
+                    below = switch_below
                 system = partition.system
                 args = (step * dt, y, dt, chunk, compiled.md, compiled.cd,
-                        compiled.options(switch_below), system.ic, system.dc)
+                        compiled.options(below), system.ic, system.dc)
                 args += (work, fail_y) if work is not None else (fail_y,)
                 status, done, t_fail = advance(*args)
                 step += done
+                after_switch = False
                 if status == kernels.OK:
                     if step % record_every == 0 or step == n_steps:
                         ts.append(step * dt)
                         ys.append(y.copy())
                     bar.update(step)
-                    wall_check(step * dt)
                 elif status == kernels.SWITCH:
                     switch_below = _switch(partition, t_fail, fail_y, n)
+                    after_switch = True
                 else:
                     _raise_status(status, method, partition, t_fail, fail_y, n, dt,
                                   raise_state_error)
@@ -110,8 +120,17 @@ def _raise_status(status, method, partition, t, y, n, dt, raise_state_error):
             f"{method}: the implicit stage equations did not converge at t = {t:.6g} s with "
             f"dt = {dt:g} s, even with a new Jacobian; a smaller dt follows the motion more "
             "closely (or use method='RK4' to see where the motion becomes violent)")
+    state = y[:2 * n]
+    if not (np.isfinite(state).all() and np.abs(state).max() <= DIVERGENCE_LIMIT):
+        raise_state_error(t, y, dt)          # a diverged stage: the run diverged
     # evaluation failures: the Python reference raises the proper ConstraintError
     partition.system.solve(t, y[:n], y[n:2 * n], switch_below=partition.switch_below)
+    if status == kernels.SINGULAR_REDUCED:
+        raise SimulationError(
+            f"{method}: at t = {t:.6g} s the reduced mass matrix N^T M N is not positive "
+            "definite in floating point (the Python reference's LU still solves it): the "
+            f"state is far from any physical one, the run is probably diverging (dt = {dt:g} "
+            f"s; q = {np.round(y[:n], 6).tolist()})")
     raise SimulationError(
         f"{method}: the compiled right-hand side failed (status {status}) at t = {t:.6g} s but "
         "the Python reference evaluates the same state; please report this with the model "

@@ -21,9 +21,14 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the refere
 
 if ENABLED:
     _jit = numba.njit(cache=True, fastmath=False)
+    # generated code of the user's expressions (gpme_core.compiled): a division by zero
+    # gives inf or nan as in numpy, for the caller's finiteness check to report, instead
+    # of raising ZeroDivisionError out of the compiled loop
+    _jit_user = numba.njit(cache=True, fastmath=False, error_model="numpy")
 else:  # pragma: no cover
     def _jit(f):
         return f
+    _jit_user = _jit
 
 
 def run(kernel, *args):

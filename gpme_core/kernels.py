@@ -628,8 +628,10 @@ NEWTON_SLOW = 3      # more iterations than this: refresh the Jacobian for the n
 
 
 @_jit
-def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
-    """Forward-difference Jacobians d q_ddot / d q and d q_ddot / d q_dot (n, n); status."""
+def _jacobian(t, q, v, md, cd, opts, ic, dc, jq, jv):
+    """Forward-difference Jacobians d q_ddot / d q and d q_ddot / d q_dot (n, n); status.
+    The unperturbed evaluation may ask for a partition switch (SWITCH, as any evaluation
+    of the run); the perturbed ones, a root-eps away, do not."""
     n = q.shape[0]
     k = dc.shape[0]
     base = np.empty(n)
@@ -637,7 +639,8 @@ def _jacobian(t, q, v, md, cd, opts_fd, ic, dc, jq, jv):
     lam = np.empty(k)
     info = np.empty(INFO_SIZE)
     ws = np.empty(workspace_size(n, k, cd[4].shape[0]))
-    st = evaluate(t, q, v, md, cd, opts_fd, ic, dc, base, lam, info, ws)
+    opts_fd = (opts[0], opts[1], opts[2], 0.0, opts[4], opts[5])
+    st = evaluate(t, q, v, md, cd, opts, ic, dc, base, lam, info, ws)
     if st != OK:
         return st
     qp = q.copy()
@@ -709,7 +712,6 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
     size = y.shape[0]
     n = (size - N_WORK) // 2
     k = dc.shape[0]
-    opts_fd = (opts[0], opts[1], opts[2], 0.0, opts[4], opts[5])
     vs = np.empty((3, n))
     qs = np.empty((3, n))
     fs = np.empty((3, n))
@@ -742,7 +744,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
             # k > 0 computed k steps ago
             rebuild = ctrl[R_STEP] != h
             if ctrl[R_JAC_AGE] < 0.0:
-                st = _jacobian(t, q0, v0, md, cd, opts_fd, ic, dc, jq, jv)
+                st = _jacobian(t, q0, v0, md, cd, opts, ic, dc, jq, jv)
                 ctrl[R_EVALUATIONS] += 2 * n + 1
                 ctrl[R_JACOBIANS] += 1
                 if st != OK:

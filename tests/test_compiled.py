@@ -288,10 +288,6 @@ def test_compiled_sympy_constraint_out_of_its_domain_is_a_status(rng, monkeypatc
         part.solve(0.06, q, q_dot)
 
 
-@pytest.mark.xfail(strict=True, raises=ZeroDivisionError, reason=(
-    "bug: generated SymPy code divides by zero in numba (error_model 'python' raises "
-    "ZeroDivisionError) instead of giving inf, so evaluate raises instead of returning "
-    "NOT_FINITE"))
 def test_compiled_sympy_constraint_at_its_pole_is_a_status(rng, monkeypatch):
     """At t = 0.05 s exactly PHI_HEIGHT's time derivatives divide by zero: the compiled
     evaluation must return NOT_FINITE like any other value that is not finite."""

@@ -211,11 +211,6 @@ class Livelock(AssertionError):
     """The compiled loop kept switching the dependent coordinates at one step."""
 
 
-@pytest.mark.xfail(strict=True, raises=Livelock, reason=(
-    "bug: compiled_runs.run_compiled restarts the whole step after a SWITCH status; when "
-    "the step's first evaluation needs one partition and a later stage the other, it "
-    "switches back and forth forever (events grow without bound; max_wall_s is not "
-    "checked); the Python RK4 switches inside the step and goes on"))
 def test_diverging_run_that_switches_partitions_within_a_step(monkeypatch):
     """The flexible crane (n_rfe = 2) at dt = 10 ms: its stages leave any sensible state.
     The Python RK4 switches once (t = 0.015 s, psi3, z4 -> theta_arm_2, phi_arm_1) and
@@ -237,11 +232,6 @@ def test_diverging_run_that_switches_partitions_within_a_step(monkeypatch):
                               check_step=False)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "bug: a diverged RK4 stage (|q| ~ 1e6 .. 1e10, beyond DIVERGENCE_LIMIT) whose M is no "
-    "longer positive definite in floating point gives status SINGULAR_REDUCED; "
-    "compiled_runs._raise_status then raises 'the compiled right-hand side failed "
-    "(status 2) ... please report' where the Python path says 'the run diverged'"))
 def test_diverging_run_whose_stage_loses_positive_definiteness():
     """The flexible crane without constraints at dt = 10 ms: the Python RK4 says the run
     diverged at the end of the step (t = 0.02 s); the compiled loop meets a stage there
@@ -293,10 +283,6 @@ def test_sympy_constraint_leaving_its_domain_fails_as_on_the_python_path():
     assert "is not finite at t = 0.051 s" in str(exc) and "sqrt: where 0.05 - t <= 0" in str(exc)
 
 
-@pytest.mark.xfail(strict=True, raises=ZeroDivisionError, reason=(
-    "bug: generated SymPy code raises ZeroDivisionError in numba (error_model 'python') at "
-    "a pole instead of giving inf; run_compiled lets it out instead of the Python path's "
-    "ConstraintError"))
 def test_sympy_constraint_at_its_pole_fails_as_on_the_python_path():
     """With dt = 1 ms the run evaluates t = 0.05 s exactly, where PHI_HEIGHT's time
     derivatives divide by zero."""
@@ -326,11 +312,6 @@ def test_singular_partition_without_switching(method):
         assert str(info.value) == str(python_exc)
 
 
-@pytest.mark.xfail(strict=True, raises=SimulationError, reason=(
-    "bug: radau_advance computes its Jacobian with switching off (opts_fd: switch_below "
-    "0), so a singular partition at a step's start gives SINGULAR_PARTITION instead of "
-    "SWITCH; _raise_status's Python re-evaluation switches and succeeds, and the run "
-    "stops with 'the compiled right-hand side failed (status 1) ... please report'"))
 def test_radau_iia_starting_on_a_singular_partition_switches_at_once():
     """As the RK4 run of tests/test_dependent_switch.py: started with the q2 column of A
     zero, the run switches to q1 at t = 0 and moves as the run given q1 from the start."""
