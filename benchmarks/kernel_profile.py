@@ -24,19 +24,21 @@ BATCH = 400
 
 @numba.njit
 def _loop_chain(count, md, q):
+    origins, generators, is_revolute = kernels.model_parts(md)[:3]
     for _ in range(count):
-        fast.chain(md[0], md[1], md[2], q)
+        fast.chain(origins, generators, is_revolute, q)
 
 
 @numba.njit
 def _loop_terms(count, md, t_all, s_all, q_dot):
+    pseudo, gamma = kernels.model_parts(md)[3:5]
     for _ in range(count):
-        fast.terms(t_all, s_all, md[3], md[4], q_dot)
+        fast.terms(t_all, s_all, pseudo, gamma, q_dot)
 
 
 @numba.njit
 def _loop_rows(count, t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
-    ws = np.empty(kernels.rows_scratch_size(q.shape[0], cd[4].shape[0]))
+    ws = np.empty(kernels.rows_scratch_size(q.shape[0], cd[0][1]))
     for _ in range(count):
         kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws)
 
@@ -50,7 +52,7 @@ def _loop_reduced(count, m_mat, rhs, a, c, ic, dc, q_ddot, lam):
 
 @numba.njit
 def _loop_evaluate(count, t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
-    ws = np.empty(kernels.workspace_size(q.shape[0], dc.shape[0], cd[4].shape[0]))
+    ws = np.empty(kernels.workspace_size(q.shape[0], dc.shape[0], cd[0][1]))
     for _ in range(count):
         kernels.evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws)
 
@@ -69,11 +71,11 @@ def profile(n_rfe, t=0.37, seed=0):
     if cs is None:
         raise SystemExit(f"not compiled: {why}")
     md, cd = cs.md, cs.cd
-    t_all, s_all, m_mat, h, g = fast.chain_and_terms(*md[:5], q, q_dot)
+    t_all, s_all, m_mat, h, g = fast.chain_and_terms(*kernels.model_parts(md)[:5], q, q_dot)
     k, n = system.n_constraints, q.size
     phi, phi_dot, kappa, a = np.empty(k), np.empty(k), np.empty(k), np.empty((k, n))
     kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa,
-                            np.empty(kernels.rows_scratch_size(n, cd[4].shape[0])))
+                            np.empty(kernels.rows_scratch_size(n, cs.n_points)))
     c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
     out = np.empty(n), np.empty(k)
     return {"n_rfe": n_rfe, "coordinates": n,

@@ -101,8 +101,8 @@ class _Tables:
 
 
 def pack(system):
-    """(md, cd, user_points, user_times) of ``system`` for gpme_core.kernels; NotCompilable
-    names the first part that cannot be compiled."""
+    """(md, cd, user_points, user_times) of ``system`` for gpme_core.kernels (layout in its
+    docstring); NotCompilable names the first part that cannot be compiled."""
     model = system.model
     tables = _Tables()
     m = system.n_constraints
@@ -138,21 +138,22 @@ def pack(system):
     for d in model.drives:
         d_coord.append(model.index(d.joint))
         d_fun.append(tables.time_function(d.function, f"the drive on {d.joint!r}"))
-    p_link = np.array([k[0] for k in tables.points], dtype=np.int64)
-    p_r = np.array([k[1] for k in tables.points], dtype=float).reshape(-1, 3)
-    f_par = np.array([v for p in tables.f_par for v in p], dtype=float)
-    md = (np.ascontiguousarray(model.origins), np.ascontiguousarray(model.generators),
-          np.ascontiguousarray(model.is_revolute), np.ascontiguousarray(model.pseudo_inertias),
-          np.ascontiguousarray(model.gamma, dtype=float),
-          np.ascontiguousarray(model.stiffness, dtype=float),
-          np.ascontiguousarray(model.spring_reference, dtype=float),
-          np.ascontiguousarray(model.damping, dtype=float),
-          np.ascontiguousarray(model.lower_limits, dtype=float),
-          np.ascontiguousarray(model.upper_limits, dtype=float))
-    cd = (c_kind, c_point, c_fun, c_par, p_link, p_r,
-          np.array(tables.f_kind, dtype=np.int64), np.array(tables.f_off, dtype=np.int64),
-          f_par if f_par.size else np.zeros(1), np.array(d_coord, dtype=np.int64),
-          np.array(d_fun, dtype=np.int64))
+    p_link = [k[0] for k in tables.points]
+    p_r = [v for k in tables.points for v in k[1]]
+    f_par = [v for p in tables.f_par for v in p]
+    ints = ([m, len(p_link), len(tables.f_kind), len(d_coord)] + c_kind.tolist()
+            + c_point.tolist() + c_fun.tolist() + p_link + tables.f_kind + tables.f_off
+            + d_coord + d_fun)
+    cd = (np.array(ints, dtype=np.int64),
+          np.concatenate([c_par.ravel(), np.array(p_r, dtype=float),
+                          np.array(f_par, dtype=float)]))
+    mats = np.ascontiguousarray(np.stack([model.origins, model.generators,
+                                          model.pseudo_inertias]), dtype=float)
+    vecs = np.ascontiguousarray(np.stack([model.is_revolute.astype(float), model.stiffness,
+                                          model.spring_reference, model.damping,
+                                          model.lower_limits, model.upper_limits]),
+                                dtype=float)
+    md = (mats, vecs, np.ascontiguousarray(model.gamma, dtype=float))
     return md, cd, tables.user_points, tables.user_times
 
 
@@ -264,10 +265,15 @@ class CompiledSystem:
         self.paper_eq7 = 1.0 if system.damping_form == "paper-eq7" else 0.0
 
     def options(self, switch_below=None):
-        """The opts tuple of gpme_core.kernels (switch_below None: never switch)."""
-        return (float(self.system.alpha), float(self.system.beta), self.paper_eq7,
-                0.0 if switch_below is None else float(switch_below), SINGULAR_RCOND,
-                DIVERGENCE_LIMIT)
+        """The opts array of gpme_core.kernels (switch_below None: never switch)."""
+        return np.array([self.system.alpha, self.system.beta, self.paper_eq7,
+                         0.0 if switch_below is None else switch_below, SINGULAR_RCOND,
+                         DIVERGENCE_LIMIT], dtype=float)
+
+    @property
+    def n_points(self):
+        """Number of distinct constrained points."""
+        return int(self.cd[0][1])
 
     def evaluate(self, t, q, q_dot, ic, dc, switch_below=None):
         """(status, q_ddot (n,), multipliers (m,), info (kernels.INFO_SIZE,)) at (t, q, q_dot)."""
@@ -282,7 +288,7 @@ class CompiledSystem:
 
     def workspace(self):
         """A fresh float workspace for gpme_core.kernels.evaluate."""
-        return np.empty(self.module.workspace_size(self.n, self.m, self.cd[4].shape[0]))
+        return np.empty(self.module.workspace_size(self.n, self.m, self.n_points))
 
     def accelerator(self, ic, dc):
         """A function (t, q, q_dot) -> q_ddot (n,) for a fixed partition, its buffers

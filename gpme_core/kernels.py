@@ -20,14 +20,17 @@ Multipliers: lambda = A_dc^-T (M q_ddot - h - Q)_dc.
 Everything is SI; q, q_dot (n,) ordered as model.coordinate_names.  Data tuples (built by
 gpme_core.compiled.pack):
 
-    md = (origins (n,4,4), generators (n,4,4), is_revolute (n,) bool, pseudo_inertias
-          (n,4,4), gamma (4,), stiffness (n,), spring_reference (n,), damping (n,),
-          lower_limits (n,), upper_limits (n,))
-    cd = (c_kind (m,) int, c_point (m,) int, c_fun (m,) int, c_par (m, 4), p_link (P,) int,
-          p_r (P, 3) m, f_kind (F,) int, f_off (F,) int, f_par (.,), d_coord (D,) int,
-          d_fun (D,) int)
-    opts = (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
-            divergence_limit)
+    md = (mats (3, n, 4, 4): origins, generators, pseudo_inertias; vecs (6, n):
+          is_revolute (0/1), stiffness, spring_reference, damping, lower_limits,
+          upper_limits; gamma (4,))                      -> :func:`model_parts`
+    cd = (ci int64: m, P, F, D, c_kind (m), c_point (m), c_fun (m), p_link (P), f_kind (F),
+          f_off (F), d_coord (D), d_fun (D); cf float: c_par (m, 4), p_r (P, 3) m, f_par)
+                                                         -> :func:`constraint_parts`
+    opts = float array (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
+           divergence_limit)
+
+(few arrays rather than one per quantity: each argument of a compiled function costs its
+own typing and unboxing on every call from Python.)
 
 Errors are status codes (never exceptions, never NaN results): the caller re-evaluates
 the failing state with the Python reference (gpme_core.gpme) to raise the error message.
@@ -85,6 +88,39 @@ def user_time_terms(index, t, out):
         out[i] = np.nan
 
 # --- user functions: end ---
+
+
+@_jit
+def model_parts(md):
+    """(origins, generators, is_revolute, pseudo_inertias, gamma, stiffness,
+    spring_reference, damping, lower_limits, upper_limits) views of md."""
+    mats, vecs, gamma = md
+    return (mats[0], mats[1], vecs[0], mats[2], gamma, vecs[1], vecs[2], vecs[3], vecs[4],
+            vecs[5])
+
+
+@_jit
+def constraint_parts(cd):
+    """(c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun)
+    views of cd (module docstring)."""
+    ci, cf = cd
+    m, n_points, n_fun, n_drive = ci[0], ci[1], ci[2], ci[3]
+    o = 4
+    c_kind = ci[o:o + m]
+    c_point = ci[o + m:o + 2 * m]
+    c_fun = ci[o + 2 * m:o + 3 * m]
+    o += 3 * m
+    p_link = ci[o:o + n_points]
+    o += n_points
+    f_kind = ci[o:o + n_fun]
+    f_off = ci[o + n_fun:o + 2 * n_fun]
+    o += 2 * n_fun
+    d_coord = ci[o:o + n_drive]
+    d_fun = ci[o + n_drive:o + 2 * n_drive]
+    c_par = cf[:4 * m].reshape((m, 4))
+    p_r = cf[4 * m:4 * m + 3 * n_points].reshape((n_points, 3))
+    f_par = cf[4 * m + 3 * n_points:]
+    return c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun
 
 
 @_jit
@@ -155,7 +191,8 @@ def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
 def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws):
     """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
     value is not finite.  ws: float scratch of rows_scratch_size(n, n_points)."""
-    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par = cd[:9]
+    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _ = \
+        constraint_parts(cd)
     m = c_kind.shape[0]
     n = q.shape[0]
     n_points = p_link.shape[0]
@@ -444,14 +481,14 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     """Status of one evaluation at (t s, q (n,), q_dot (n,)); fills q_ddot (n,), lam (m,)
     and info (INFO_SIZE,) = (partition rcond, q_dot.d (W), q_dot.t (W), q_dot.A^T lam (W),
     0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
-    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping = md[:8]
-    d_coord, d_fun = cd[9], cd[10]
-    f_kind, f_off, f_par = cd[6], cd[7], cd[8]
+    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _ = \
+        model_parts(md)
+    _, _, _, _, _, _, f_kind, f_off, f_par, d_coord, d_fun = constraint_parts(cd)
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
     n = q.shape[0]
     k = dc.shape[0]
-    n_points = cd[4].shape[0]
+    n_points = cd[0][1]
     t_all = ws[:16 * n].reshape((n, 4, 4))
     s_all = ws[16 * n:32 * n].reshape((n, 4, 4))
     used = 32 * n
@@ -521,7 +558,7 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
 @_jit
 def state_status(y, n, md, limit):
     """DIVERGED, OUT_OF_RANGE or OK for a state y = (q, q_dot, W)."""
-    lower, upper = md[8], md[9]
+    lower, upper = md[1][4], md[1][5]
     for i in range(2 * n):
         if not (math.isfinite(y[i]) and abs(y[i]) <= limit):
             return DIVERGED
@@ -535,7 +572,7 @@ def state_status(y, n, md, limit):
 def derivative(t, y, md, cd, opts, ic, dc, dy, lam, info, ws):
     """dy = (q_dot, q_ddot, W rates) of the integrated state y (2 n + 3,); status.
     ws: the workspace of :func:`evaluate`."""
-    n = md[0].shape[0]
+    n = md[1].shape[1]
     q_ddot = dy[n:2 * n]
     status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, q_ddot, lam, info, ws)
     dy[:n] = y[n:2 * n]
@@ -556,7 +593,7 @@ def rk4_advance(t0, y, dt, n_steps, md, cd, opts, ic, dc, fail_y):
     stage = np.empty(size)
     lam = np.empty(dc.shape[0])
     info = np.empty(INFO_SIZE)
-    ws = np.empty(workspace_size(n, dc.shape[0], cd[4].shape[0]))
+    ws = np.empty(workspace_size(n, dc.shape[0], cd[0][1]))
     for step in range(n_steps):
         t = t0 + step * dt
         st = derivative(t, y, md, cd, opts, ic, dc, k1, lam, info, ws)
@@ -638,8 +675,9 @@ def _jacobian(t, q, v, md, cd, opts, ic, dc, jq, jv):
     out = np.empty(n)
     lam = np.empty(k)
     info = np.empty(INFO_SIZE)
-    ws = np.empty(workspace_size(n, k, cd[4].shape[0]))
-    opts_fd = (opts[0], opts[1], opts[2], 0.0, opts[4], opts[5])
+    ws = np.empty(workspace_size(n, k, cd[0][1]))
+    opts_fd = opts.copy()
+    opts_fd[3] = 0.0
     st = evaluate(t, q, v, md, cd, opts, ic, dc, base, lam, info, ws)
     if st != OK:
         return st
@@ -722,7 +760,7 @@ def radau_advance(t0, y, h, n_steps, md, cd, opts, ic, dc, work, fail_y):
     info = np.empty(INFO_SIZE)
     q_ddot = np.empty(n)
     stage_y = np.empty(size)
-    ws = np.empty(workspace_size(n, k, cd[4].shape[0]))
+    ws = np.empty(workspace_size(n, k, cd[0][1]))
     tol = ctrl[R_NEWTON_TOL]
     for step in range(n_steps):
         t = t0 + step * h
