@@ -464,9 +464,15 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     events = []
     partition = RunPartition(start_system, switch_rcond, events)
     rhs = _rhs_factory(partition, n)
+    use_compiled = compiled
+    compiled, not_compiled = None, "the method has no compiled loop"
+    if method in COMPILED_METHODS:
+        compiled, not_compiled = (for_system(start_system) if use_compiled else
+                                  (None, "compiled=False"))
     seconds_per_eval = None
     if progress or before_run is not None:      # compiles first, announced, then times
-        seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=progress)[1]
+        seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=progress,
+                                           compiled=compiled)[1]
     limit = None
     if method == "RK4" and (dt is None or check_step) or (
             before_run is not None and method in ("RK45", "DOP853")):
@@ -478,11 +484,6 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
             raise UnstableStepError(unstable_step_message(dt, limit, mode,
                                                           "at the start (t = 0)"))
         dt, record_every = rk4_step_plan(t_end, dt, output_dt)
-    use_compiled = compiled
-    compiled, not_compiled = None, "the method has no compiled loop"
-    if method in COMPILED_METHODS:
-        compiled, not_compiled = (for_system(start_system) if use_compiled else
-                                  (None, "compiled=False"))
     if method == "RadauIIA":
         if compiled is None:
             raise ModelError(f"method 'RadauIIA' runs compiled only, and this system cannot be "
@@ -491,7 +492,8 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                                          output_dt)
     if before_run is not None or estimate_only:
         if seconds_per_eval is None:
-            seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False)[1]
+            seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False,
+                                               compiled=compiled)[1]
         if limit is None and method in ("RK45", "DOP853"):
             limit = rk4_limit(start_system, 0.0, q0, q_dot0)[0]
         cost = estimate_run(method, t_end, output_dt, n, history_columns(start_system),

@@ -15,9 +15,10 @@ from typing import Optional
 import numpy as np
 
 # evaluations of the right-hand side per step of each method
-# RadauIIA: 3 stages x about 2 Newton iterations (measured 1.9-2.2 per step on the crane,
-# plus the occasional Jacobian); not exact
-STAGES = {"RK4": 4, "RadauIIA": 6, "RK45": 6, "DOP853": 12, "Radau": 3}
+# RadauIIA: 3 stages x 2-3 Newton passes plus a Jacobian (2n + 1 evaluations) every ~30
+# steps: measured 9.2 evaluations per step on the flexible crane (n_rfe = 5, dt = 1 ms);
+# not exact
+STAGES = {"RK4": 4, "RadauIIA": 9, "RK45": 6, "DOP853": 12, "Radau": 3}
 # CSV bytes per value: '%.17g' of a double is at most 24 characters plus the separator
 CSV_BYTES_PER_VALUE = 25
 # the history in memory: the integrated states (float64) and the DataFrame built from them
@@ -114,20 +115,33 @@ def kernels_compiled():
                                                            "point"))
 
 
-def time_evaluation(system, q0, q_dot0, announce=True):
+def time_evaluation(system, q0, q_dot0, announce=True, compiled=None):
     """(compile_s, seconds_per_eval): the first reduced solve at (0, q0, q_dot0) timed on its
     own (it compiles the numba kernels, or loads them from their cache, when this process has
     not yet; with ``announce`` that is said on stderr before it starts), then the median over
     TIMED_BATCHES batches of TIMED_EVALUATIONS more.
 
-    system : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
+    system   : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
+    compiled : None (the Python path's ProgrammedMotion.solve is timed) or the run's
+               gpme_core.compiled.CompiledSystem, whose fused evaluation is timed instead
+               (its first call compiles gpme_core.kernels; called from Python, so it costs
+               ~3 us more than inside the compiled loops: a cautious estimate)
     """
+    if compiled is not None:
+        solve = compiled.accelerator(system.ic, system.dc)
+    else:
+        solve = system.solve
     compiling = not kernels_compiled()
     if compiling and announce:
         print("compiling the numba kernels (first call in this process; cached on disk "
               "for the next) ...", file=sys.stderr, flush=True)
     start = time.perf_counter()
     system.solve(0.0, q0, q_dot0)
+    if compiled is not None:
+        try:
+            solve(0.0, q0, q_dot0)
+        except RuntimeError:            # the compiled evaluation fails where the Python
+            solve = system.solve        # one does not: time the Python one (cautious)
     first = time.perf_counter() - start
     if compiling and announce:
         print(f"  compiled in {first:.1f} s", file=sys.stderr, flush=True)
@@ -135,7 +149,7 @@ def time_evaluation(system, q0, q_dot0, announce=True):
     for _ in range(TIMED_BATCHES):
         start = time.perf_counter()
         for _ in range(TIMED_EVALUATIONS // TIMED_BATCHES):
-            system.solve(0.0, q0, q_dot0)
+            solve(0.0, q0, q_dot0)
         batches.append((time.perf_counter() - start) / (TIMED_EVALUATIONS // TIMED_BATCHES))
     return first, float(np.median(batches))
 
@@ -144,7 +158,7 @@ def estimate_run(method, t_end, output_dt, n_coordinates, columns, seconds_per_e
                  dt=None, stable_step=None):
     """RunCost of a run.
 
-    method          : "RK4", "RK45", "DOP853" or "Radau"
+    method          : "RK4", "RadauIIA", "RK45", "DOP853" or "Radau"
     t_end, output_dt: s
     n_coordinates   : n (the integrated state is 2n + 3 numbers)
     columns         : columns of the recorded history (gpme_core.integrate.history_frame)
