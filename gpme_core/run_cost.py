@@ -105,14 +105,16 @@ def format_bytes(b):
     return f"{b:.0f} B"
 
 
-def kernels_compiled():
+def kernels_compiled(compiled=None):
     """Whether the numba kernels are compiled (or loaded from their cache) in this process;
-    True when the compiled path is off."""
+    True when the compiled path is off.  compiled: a gpme_core.compiled.CompiledSystem whose
+    fused evaluation counts too (None: only the Python path's kernels)."""
     from . import fast
     if not fast.ENABLED:
         return True
-    return all(getattr(fast, name).signatures for name in ("chain_and_terms", "reduced_solve",
+    done = all(getattr(fast, name).signatures for name in ("chain_and_terms", "reduced_solve",
                                                            "point"))
+    return done and (compiled is None or bool(compiled.module.evaluate.signatures))
 
 
 def time_evaluation(system, q0, q_dot0, announce=True, compiled=None):
@@ -131,7 +133,7 @@ def time_evaluation(system, q0, q_dot0, announce=True, compiled=None):
         solve = compiled.accelerator(system.ic, system.dc)
     else:
         solve = system.solve
-    compiling = not kernels_compiled()
+    compiling = not kernels_compiled(compiled)
     if compiling and announce:
         print("compiling the numba kernels (first call in this process; cached on disk "
               "for the next) ...", file=sys.stderr, flush=True)
