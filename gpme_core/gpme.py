@@ -123,6 +123,14 @@ class ProgrammedMotion:
         elif self.n_constraints == 0:
             self.set_dependent(())
 
+    def __getstate__(self):
+        """Pickled (and copied) without the compiled form that gpme_core.compiled.for_system
+        caches on it: that holds a module, which cannot be pickled; the receiving process
+        packs its own (the compiled code itself comes from numba's disk cache)."""
+        state = self.__dict__.copy()
+        state.pop("_compiled", None)
+        return state
+
     # --------------------------------------------------------------- partition
     def set_dependent(self, names):
         """Fix the dependent coordinates by name (m of them)."""
