@@ -73,7 +73,7 @@ def test_wrong_state_shape_and_method():
     msg = str(exc.value)
     assert "q0 must have shape (4,) ordered as ['z1', 'psi2', 'psi3', 'z4'], got (3,)" in msg
     assert "q_dot0 must be finite" in msg
-    assert "method must be one of ('RK4', 'RK45', 'DOP853', 'Radau'), got 'Euler'" in msg
+    assert "method must be one of ('RK4', 'RadauIIA', 'RK45', 'DOP853', 'Radau'), got 'Euler'" in msg
     assert "t_end must be positive" in msg
 
 
