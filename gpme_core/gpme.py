@@ -124,12 +124,20 @@ class ProgrammedMotion:
             self.set_dependent(())
 
     def __getstate__(self):
-        """Pickled (and copied) without the compiled form that gpme_core.compiled.for_system
-        caches on it: that holds a module, which cannot be pickled; the receiving process
-        packs its own (the compiled code itself comes from numba's disk cache)."""
+        """Pickled without the compiled form that gpme_core.compiled.for_system caches on it:
+        that holds a module, which cannot be pickled; the receiving process packs its own
+        (the compiled code itself comes from numba's disk cache)."""
         state = self.__dict__.copy()
         state.pop("_compiled", None)
         return state
+
+    def __copy__(self):
+        """A shallow copy sharing everything, the cached compiled form included (copies made
+        by :meth:`with_dependent` differ only in their partition, which the compiled kernels
+        take as an argument)."""
+        other = object.__new__(type(self))
+        other.__dict__.update(self.__dict__)
+        return other
 
     # --------------------------------------------------------------- partition
     def set_dependent(self, names):
