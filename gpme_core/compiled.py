@@ -37,7 +37,9 @@ from .gpme import SINGULAR_RCOND
 from .time_functions import (Constant, Cosine, QuinticRamp, Sine, SympyTimeFunction,
                              Tabulated)
 
-DIVERGENCE_LIMIT = 1e6          # same meaning as gpme_core.integrate.DIVERGENCE_LIMIT
+# |q| or |q_dot| above this means the run has blown up (SI units: m, rad, m/s, rad/s); the
+# compiled loops and gpme_core.integrate (which imports it) stop a run there
+DIVERGENCE_LIMIT = 1e6
 _BEGIN = "# --- user functions: begin ---"
 _END = "# --- user functions: end ---"
 
@@ -232,7 +234,7 @@ def generated_kernels(user_points, user_times):
     template = Path(kernels.__file__).read_text(encoding="utf-8")
     head, rest = template.split(_BEGIN, 1)
     _, tail = rest.split(_END, 1)
-    source = (head.replace("from .fast import", "from gpme_core.fast import _jit_user,")
+    source = (head.replace("from .fast import (", "from gpme_core.fast import (_jit_user, ")
               + _BEGIN + "\n\n\n" + user_source(user_points, user_times) + "\n" + _END + tail)
     digest = hashlib.sha256(source.encode("utf-8")).hexdigest()[:20]
     if digest in _MODULES:

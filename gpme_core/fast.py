@@ -392,14 +392,22 @@ def reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
         q_ddot = np.linalg.solve(lhs, b)
     except Exception:
         ok = False
-    # reactions F = M q_ddot - rhs = A^T lambda; lambda = A_dc^-T F[dc]
     lam = np.zeros(k)
+    multipliers_into(m, rhs, q_ddot, inv, dc, lam)
+    return q_ddot, lam, rcond, ok
+
+
+@_jit
+def multipliers_into(m, rhs, q_ddot, inv_dc, dc, lam):
+    """lam (k,) = A_dc^-T F[dc] from the reactions F = M q_ddot - rhs = A^T lambda;
+    m (n, n), rhs (n,), q_ddot (n,), inv_dc (k, k) = A_dc^-1, dc (k,) indices."""
+    n = m.shape[0]
+    k = dc.shape[0]
     for i in range(k):
         acc = 0.0
         for p in range(k):
             f = -rhs[dc[p]]
             for c in range(n):
                 f += m[dc[p], c] * q_ddot[c]
-            acc += inv[p, i] * f
+            acc += inv_dc[p, i] * f
         lam[i] = acc
-    return q_ddot, lam, rcond, ok

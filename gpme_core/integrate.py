@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 from .dynamics import kinetic_energy, potential_energy
 from .errors import (ConstraintError, GpmeError, ModelError, SimulationError,
                      UnstableStepError)
-from .compiled import for_system
+from .compiled import DIVERGENCE_LIMIT, for_system
 from .compiled_runs import COMPILED_METHODS, run_compiled
 from .gpme import SWITCH_RCOND, partition_rcond
 from .run_cost import estimate_run, time_evaluation
@@ -40,8 +40,6 @@ FIXED_STEP_METHODS = ("RK4", "RadauIIA")
 RADAU_IIA_STEP = 1e-3
 IMPLICIT_METHODS = ("Radau",)
 N_WORK = 3
-# |q| or |q_dot| above this means the run has blown up (SI units: m, rad, m/s, rad/s)
-DIVERGENCE_LIMIT = 1e6
 # entries of the state named in a divergence message
 MESSAGE_ENTRIES = 6
 # progress of the solve_ivp methods: t_end in this many parts (their steps are not known)

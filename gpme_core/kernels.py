@@ -42,7 +42,8 @@ import math
 
 import numpy as np
 
-from .fast import POINT_SCRATCH, _jit, chain_into, point_into, terms_into, terms_scratch_size
+from .fast import (POINT_SCRATCH, _jit, chain_into, multipliers_into, point_into, terms_into,
+                   terms_scratch_size)
 
 # ---------------------------------------------------------------- status codes
 OK = 0
@@ -457,14 +458,7 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
         for j in range(ni):
             s += gam[p, j] * z[j]
         q_ddot[dc[p]] = s
-    for i in range(k):                       # lambda = A_dc^-T (M q_ddot - rhs)_dc
-        s = 0.0
-        for p in range(k):
-            f = -rhs[dc[p]]
-            for j in range(n):
-                f += m_mat[dc[p], j] * q_ddot[j]
-            s += inv[p, i] * f
-        lam[i] = s
+    multipliers_into(m_mat, rhs, q_ddot, inv, dc, lam)
     return OK, rel
 
 
