@@ -1,0 +1,196 @@
+"""Gates of whole runs made by two engines with *different* integrators, from step halving.
+
+crosscheck.run_gates gates an engine that integrates gpme's ODE with gpme's own scheme (RK4,
+same step, same stage times): both runs then carry the same truncation error and only
+gpme's own error needs estimating.  An engine that integrates with its own scheme (Drake's
+Runge-Kutta, Exudyn's generalized-alpha on the index-3 DAE) carries a different truncation
+error, so each engine's error is measured on its own side, by halving its step:
+
+    runs at h, h/2, h/4 of one engine, global order p:
+        x_h/2 - x_h/4 = C (h/2)^p (1 - 2^-p)   =>   e(h/4) = (x_h/2 - x_h/4) / (2^p - 1)
+
+and the observed order p_obs = log2(max|x_h - x_h/2| / max|x_h/2 - x_h/4|) checks the
+asymptotic regime.  The order row accepts |p_obs - p| <= ORDER_TOLERANCE (1), so the error
+estimate uses the lowest accepted order p - 1, which bounds the estimate from above over
+everything the order row lets through (RK4: 1/7 of the last difference instead of 1/15;
+an order-2 scheme: the last difference itself instead of a third of it).
+
+The two finest runs (each engine at its h/4) are compared column by column; the gate is
+
+    e_gpme(h/4) + e_engine(h/4) + round-off floors of both + the engine's solver floor
+
+(solver floor: the error its nonlinear solver's tolerance allows, in the column's unit; 0 for
+explicit schemes).  A difference above the gate is more than both integrations can explain.
+"""
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .compare import Tolerance, compare
+from .run_gates import ORDER_TOLERANCE, RESOLVED, RefinedRuns, column_unit, roundoff_floor
+
+HALVINGS = 3            # runs at h, h/2, h/4
+TIME_MATCH_S = 1e-9     # s: output times of two runs are the same sample when this close
+
+
+@dataclass(frozen=True)
+class HalvedRuns:
+    """One engine's runs of one system from one start at steps h, h/2, h/4.
+
+    engine      : "gpme", "drake", "exudyn", ...
+    scheme      : the integrator in words (report text), e.g. "RK4", "generalized-alpha"
+    order       : the scheme's nominal global order p (> 1)
+    runs        : 3 DataFrames (at h, h/2, h/4), each with column "t" (s) and the compared
+                  columns, recorded at the same output times
+    dt          : s, the coarsest step h
+    solver_floor: {column: error the engine's nonlinear solver tolerance allows, in the
+                  column's unit}; missing columns have 0
+    """
+
+    engine: str
+    scheme: str
+    order: float
+    runs: tuple
+    dt: float
+    solver_floor: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if len(self.runs) != HALVINGS:
+            raise ValueError(f"{self.engine}: HalvedRuns needs {HALVINGS} runs (h, h/2, h/4), "
+                             f"got {len(self.runs)}")
+        if not self.order - ORDER_TOLERANCE > 0.0:     # also refuses NaN
+            raise ValueError(f"{self.engine}: nominal order {self.order!r} leaves no positive "
+                             f"lowest accepted order (order - {ORDER_TOLERANCE:g}); give p > "
+                             f"{ORDER_TOLERANCE:g}")
+        if not (np.isfinite(self.dt) and self.dt > 0):
+            raise ValueError(f"{self.engine}: step dt = {self.dt!r} s; give a positive step")
+        t0 = self.runs[0]["t"].to_numpy(float)
+        for k, run in enumerate(self.runs[1:], start=1):
+            t = run["t"].to_numpy(float)
+            if len(t) != len(t0) or np.abs(t - t0).max(initial=0.0) > TIME_MATCH_S:
+                raise ValueError(f"{self.engine}: the run at h/{2 ** k} is recorded at other "
+                                 "output times than the run at h (harness bug)")
+
+    @property
+    def finest(self) -> pd.DataFrame:
+        """The run at h/4."""
+        return self.runs[-1]
+
+    @property
+    def finest_dt(self) -> float:
+        """s, the finest step h/4."""
+        return self.dt / 2 ** (HALVINGS - 1)
+
+    @property
+    def n_steps(self) -> int:
+        """Steps of the finest run."""
+        t_end = float(self.finest["t"].iloc[-1])
+        return int(round(t_end / self.finest_dt))
+
+    def differences(self, column: str) -> tuple:
+        """(max_t |x_h - x_h/2|, max_t |x_h/2 - x_h/4|) of ``column``, in its unit."""
+        x1, x2, x4 = (r[column].to_numpy(float) for r in self.runs)
+        return float(np.abs(x1 - x2).max(initial=0.0)), float(np.abs(x2 - x4).max(initial=0.0))
+
+    def error(self, column: str) -> float:
+        """Estimated max_t |error| of the finest run's ``column`` at the lowest accepted
+        order p - 1: max|x_h/2 - x_h/4| / (2^(p-1) - 1)."""
+        return self.differences(column)[1] / (2.0 ** (self.order - ORDER_TOLERANCE) - 1.0)
+
+    def floor(self, column: str, reference: pd.DataFrame) -> float:
+        """Round-off (crosscheck.run_gates.roundoff_floor over the finest run's steps, scale
+        the largest |x| of ``reference``'s column) plus the solver floor, column's unit."""
+        scale = float(np.abs(reference[column].to_numpy(float)).max(initial=0.0))
+        return roundoff_floor(scale, self.n_steps) / 2.0 + float(self.solver_floor.get(column, 0.0))
+
+    def observed_order(self, columns: Sequence[str], floors: Mapping[str, float]):
+        """(p_obs, column, resolved): the smallest log2 ratio of successive differences over
+        the columns whose h/2 - h/4 difference exceeds RESOLVED floors (resolved = True);
+        when none does, the ratio of the column closest to resolved (resolved = False)."""
+        best, closest = (np.nan, None), (np.nan, None, -np.inf)
+        for c in columns:
+            d1, d2 = self.differences(c)
+            p = float(np.log2(d1 / d2)) if d1 > 0 and d2 > 0 else np.nan
+            above = d2 / floors[c] if floors[c] > 0 else np.inf
+            if np.isfinite(p) and above > closest[2]:
+                closest = (p, c, above)
+            if np.isfinite(p) and above > RESOLVED and (best[1] is None or p < best[0]):
+                best = (p, c)
+        if best[1] is not None:
+            return best[0], best[1], True
+        return closest[0], closest[1], False
+
+
+def from_refined(refined: RefinedRuns) -> HalvedRuns:
+    """gpme's RK4 runs at h, h/2, h/4 (crosscheck.run_gates.refined_gpme_runs) as HalvedRuns."""
+    return HalvedRuns("gpme", "classical RK4", 4.0, tuple(refined.runs), refined.dt)
+
+
+def gate(gpme: HalvedRuns, other: HalvedRuns, column: str, model, override=None) -> Tolerance:
+    """Tolerance of one column: both engines' halving error estimates of their finest runs
+    plus both floors (or the model file's override, a gpme_io.scenario.ToleranceOverride)."""
+    if override is not None:
+        return Tolerance(override.abs, override.rel,
+                         f"override from the model file: {override.reason}")
+    e_g, e_o = gpme.error(column), other.error(column)
+    f_g, f_o = gpme.floor(column, gpme.finest), other.floor(column, other.finest)
+    unit = column_unit(model, column) if model is not None else ""
+    solver = float(other.solver_floor.get(column, 0.0))
+    return Tolerance(
+        e_g + e_o + f_g + f_o, 0.0,
+        f"two integrators, each one's error measured by halving its own step and taken at "
+        f"the lowest order the order rows accept (p - 1): {gpme.engine} {gpme.scheme} (p = "
+        f"{gpme.order:g}) at dt = {gpme.finest_dt:.3g} s: {e_g:.2e} {unit}; {other.engine} "
+        f"{other.scheme} (p = {other.order:g}) at dt = {other.finest_dt:.3g} s: {e_o:.2e} "
+        f"{unit}; + round-off eps N |x|max per engine ({f_g + f_o - solver:.2e}) + "
+        f"{other.engine}'s solver-tolerance floor ({solver:.2e})")
+
+
+def order_row(engine: str, scenario_name: str, runs: HalvedRuns, columns: Sequence[str],
+              label: str, case: str) -> dict:
+    """Row of one engine's observed order over its three runs (validates its error
+    estimate); information only when no column's h/2 - h/4 difference is resolved."""
+    floors = {c: runs.floor(c, runs.finest) for c in columns}
+    p, col, resolved = runs.observed_order(columns, floors)
+    quantity = f"{label}: observed order of {runs.engine} ({runs.scheme})"
+    if not resolved:
+        tol = Tolerance(np.inf, 0.0, f"information: at dt/2 every column's {runs.engine} "
+                        f"step-halving difference is below {RESOLVED:g} round-off and solver "
+                        "floors, so no order can be observed (shown: the column closest to "
+                        "resolved); the gates are then the floors")
+        return compare(engine, scenario_name, quantity, case,
+                       [p if np.isfinite(p) else 0.0], [runs.order], tol, [str(col)])
+    tol = Tolerance(ORDER_TOLERANCE, 0.0,
+                    f"{runs.scheme} is order {runs.order:g}; the smallest observed order over "
+                    f"the columns resolved above their floors is {p:.2f} ({col}); |p - "
+                    f"{runs.order:g}| > {ORDER_TOLERANCE:g} means the runs are not in the "
+                    "asymptotic regime and the halving estimate is not the error")
+    return compare(engine, scenario_name, quantity, case, [p], [runs.order], tol, [col])
+
+
+def run_rows(engine: str, scenario, gpme: HalvedRuns, other: HalvedRuns,
+             columns: Sequence[str], label: str, case: str) -> list:
+    """Rows (crosscheck.compare dicts) comparing the finest runs of gpme and ``other``
+    column by column (quantity "<label> <column>", :func:`gate` or the scenario's override
+    of "<engine>/<label> <column>"), then one observed-order row per engine."""
+    g, o = gpme.finest, other.finest
+    if len(g) != len(o) or np.abs(g["t"].to_numpy(float) - o["t"].to_numpy(float)).max(
+            initial=0.0) > TIME_MATCH_S:
+        raise ValueError(f"{engine}/{scenario.name}/{label}: output times of {other.engine} "
+                         "differ from gpme's (harness bug)")
+    missing = [c for c in columns if c not in g.columns or c not in o.columns]
+    if missing:
+        raise ValueError(f"{engine}/{scenario.name}/{label}: columns {missing} missing from "
+                         "a run (harness bug)")
+    times = [f"t={t:.4g}" for t in g["t"]]
+    rows = []
+    for c in columns:
+        quantity = f"{label} {c}"
+        tol = gate(gpme, other, c, scenario.model, scenario.tolerance(engine, quantity))
+        rows.append(compare(engine, scenario.name, quantity, case, g[c].to_numpy(float),
+                            o[c].to_numpy(float), tol, times))
+    rows.append(order_row(engine, scenario.name, gpme, columns, label, case))
+    rows.append(order_row(engine, scenario.name, other, columns, label, case))
+    return rows
