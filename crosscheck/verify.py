@@ -2,7 +2,10 @@
 
 Steps: gpme (each scenario's run and its checks; without --model the paper's two crane runs
 with the paper's figures), pinocchio (term by term and exactly realised runs), mujoco
-(terms, free and programmed runs).  Writes reports/<run-id>/ (index.html, summary.json,
+(terms, free and programmed runs), drake (terms of a MultibodyPlant from the URDF, free runs
+with Drake's integrator) and exudyn (programmed runs with the task as exact index-3
+constraints); the last two are optional extras (crosscheck.engines): when one is not
+installed its step is one information row saying what to install.  Writes reports/<run-id>/ (index.html, summary.json,
 summary.csv, models.json, checks/ with every step's comparison rows and tolerances.csv.gz
 (crosscheck.reports.rows), pinocchio.html, mujoco.html and their plots, plots/, runs/ or
 paper/ with the run histories and figures; reports/README.md) and points reports/latest at
@@ -34,14 +37,16 @@ import pandas as pd
 
 from gpme.out_lock import exclusive_output, output_file_problem
 
-from .compare import CRASH_QUANTITY
+from .compare import CRASH_QUANTITY, Tolerance, compare
+from .engines import missing_message
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
 from .reports.rows import check_name, normalise, write_rows
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
-STEPS = ("gpme", "pinocchio", "mujoco")
+STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
+OPTIONAL_STEPS = ("drake", "exudyn")      # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
 QUICK_T_END = 2.0      # s of programmed motion in --quick (the paper step)
 FULL_T_END = 10.0
@@ -66,6 +71,11 @@ def default_scenarios(step, quick):
         return [crane_scenario(n) for n in PINOCCHIO_CRANE[bool(quick)]]
     if step == "mujoco":
         return [crane_scenario(n, on_constraints=True) for n in MUJOCO_CRANE]
+    if step in OPTIONAL_STEPS:
+        if missing_message(step):
+            return []
+        module = __import__(f"crosscheck.{step}.check", fromlist=["default_scenarios"])
+        return module.default_scenarios(quick)
     return [crane_scenario(0), crane_scenario(3)]
 
 
@@ -109,6 +119,14 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
 def _engine_step(name, run_dir, scenarios, quick, progress):
     module = __import__(f"crosscheck.{name}.check", fromlist=["run"])
     return module.run(run_dir, scenarios, quick=quick, progress=progress)
+
+
+def _missing_engine_row(step, message):
+    """An information row: optional engine ``step`` is not installed (``message`` says what
+    to install); the run's other steps go on."""
+    row = compare(step, "-", "not run: engine not installed", "-", [0.0], [0.0],
+                  Tolerance(float("inf"), 0.0, f"information: {message}"), ["-"])
+    return pd.DataFrame([{**row, "section": "-"}])
 
 
 def _report_crash(staging, step, exc):
@@ -310,6 +328,10 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                 else:
                     tables[step] = _models_step(staging, scenarios, quick, progress,
                                                 max_wall_s)
+            elif step in OPTIONAL_STEPS and missing_message(step):
+                _say(f"[{step}] skipped: {missing_message(step)}")
+                tables[step] = _missing_engine_row(step, missing_message(step))
+                write_rows(normalise(tables[step]), staging, step)
             else:
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
                 tables[step] = _engine_step(step, staging, chosen, quick, progress)
@@ -503,6 +525,9 @@ def main(args, problems=()):
                 mujoco_name_problems(scenarios)
         except GpmeError as exc:
             problems.append(str(exc))
+    only = STEP_ALIASES.get(getattr(args, "only", None), getattr(args, "only", None))
+    if only in OPTIONAL_STEPS and missing_message(only):
+        problems.append(f"--only {only}: {missing_message(only)}")
     if problems:
         _print_problems(problems)
         return 2

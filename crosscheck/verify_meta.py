@@ -29,11 +29,13 @@ def git_commit():
 
 
 def versions():
-    """Versions of what can change a check's numbers: gpme, the two engines, the numerical
+    """Versions of what can change a check's numbers: gpme, the four engines (Drake and
+    Exudyn "not installed" when their optional extras are missing), the numerical
     libraries, the robot descriptions of the examples and Python (the diff against the
     previous run lists those that changed)."""
     return {"gpme": _version("gpme"), "pinocchio (pin)": _version("pin"),
-            "mujoco": _version("mujoco"), "numpy": _version("numpy"),
+            "mujoco": _version("mujoco"), "drake": _version("drake"),
+            "exudyn": _version("exudyn"), "numpy": _version("numpy"),
             "scipy": _version("scipy"), "sympy": _version("sympy"), "numba": _version("numba"),
             "example-robot-data": _version("example-robot-data"),
             "python": sys.version.split()[0]}

@@ -177,8 +177,11 @@ def _crosscheck(args):
     from gpme_core.errors import GpmeError
     if args.out is not None and output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
+    from crosscheck.engines import missing_message
     from crosscheck.verify import default_scenarios, estimate_runs
     from gpme.out_lock import exclusive_output
+    if missing_message(args.engine):
+        return _error(missing_message(args.engine))
     try:
         scenarios = load_scenarios(args.model) if args.model else default_scenarios(
             args.engine, args.quick)
@@ -187,10 +190,8 @@ def _crosscheck(args):
         estimate_runs(scenarios, args.quick, args.force)
     except GpmeError as exc:
         return _error(exc)
-    if args.engine == "pinocchio":
-        from crosscheck.pinocchio import check
-    else:
-        from crosscheck.mujoco import check
+    from importlib import import_module
+    check = import_module(f"crosscheck.{args.engine}.check")
     out = Path(args.out) if args.out else Path("reports") / time.strftime(f"{args.engine}-%Y%m%d-%H%M%S")
     try:
         with exclusive_output(out):
@@ -259,8 +260,9 @@ def build_parser():
                           f"{MAX_WALL_S / 3600:g} h or {MAX_CSV_BYTES / 1e9:g} GB of history")
     sim.add_argument("--no-progress", action="store_true")
     sim.set_defaults(func=_simulate)
-    cc = sub.add_parser("crosscheck", help="compare gpme with Pinocchio or MuJoCo")
-    cc.add_argument("engine", choices=("pinocchio", "mujoco"))
+    cc = sub.add_parser("crosscheck", help="compare gpme with one engine: Pinocchio, MuJoCo, "
+                                           "Drake or Exudyn (the last two optional extras)")
+    cc.add_argument("engine", choices=("pinocchio", "mujoco", "drake", "exudyn"))
     _model_option(cc)
     cc.add_argument("--quick", action="store_true", help="CI-sized run")
     cc.add_argument("--out", default=None, help="report directory (default reports/<engine>-<time>)")
@@ -272,7 +274,8 @@ def build_parser():
     ver = sub.add_parser("verify", help="the whole verification with HTML/CSV reports")
     _model_option(ver)
     ver.add_argument("--quick", action="store_true", help="CI-sized run")
-    ver.add_argument("--only", choices=("gpme", "paper", "pinocchio", "mujoco"), default=None,
+    ver.add_argument("--only", choices=("gpme", "paper", "pinocchio", "mujoco", "drake",
+                                        "exudyn"), default=None,
                      help="one step only ('paper' is the gpme step of the default crane)")
     ver.add_argument("--out", default="reports", help="reports root directory")
     ver.add_argument("--keep", type=int, default=None, metavar="N",

@@ -140,7 +140,7 @@ def test_simulate_model_file_with_absurd_t_end(tmp_path, capsys):
     (["simulate", "--method", "Euler"], ["invalid choice: 'Euler'", "RK4"]),
     (["simulate", "--t-end", "ten"], ["invalid float value: 'ten'"]),
     (["simulate", "--n-rfe", "2.5"], ["invalid int value: '2.5'"]),
-    (["verify", "--only", "drake"], ["invalid choice: 'drake'"]),
+    (["verify", "--only", "bullet"], ["invalid choice: 'bullet'", "exudyn"]),
     (["crosscheck", "bullet"], ["invalid choice: 'bullet'"]),
     (["verify", "--keep", "many"], ["invalid int value: 'many'"]),
 ], ids=["method", "t_end_text", "n_rfe_float", "only", "engine", "keep_text"])

@@ -26,8 +26,12 @@ PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time,
                   "z_E(t) over z_a(t) (paper Fig. 3)"),
                  ("constraint_violation.png", "|Phi_1| and |Phi_2| against time (log scale)"))
 ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
-                 "mujoco": "MuJoCo (terms and full runs)"}
-ENGINE_VERSION_KEYS = {"gpme": "gpme", "pinocchio": "pinocchio (pin)", "mujoco": "mujoco"}
+                 "mujoco": "MuJoCo (terms and full runs)",
+                 "drake": "Drake (terms of a MultibodyPlant from the URDF, free runs)",
+                 "exudyn": "Exudyn (programmed runs with exact index-3 constraints)"}
+ENGINE_VERSION_KEYS = {"gpme": "gpme", "pinocchio": "pinocchio (pin)", "mujoco": "mujoco",
+                       "drake": "drake", "exudyn": "exudyn"}
+NOT_INSTALLED = "not installed"       # crosscheck.verify_meta's version of a missing package
 MAX_FAILING_LISTED = 8
 MAX_KEY_PLOTS = 3
 FILE_NOTES = {
@@ -91,9 +95,11 @@ def _verdict(summary, rows, meta, diff):
     for engine, g in summary.groupby("engine", sort=False):
         version = meta.get("versions", {}).get(ENGINE_VERSION_KEYS.get(engine, engine), "")
         n_fail = int((g["status"] == FAIL).sum())
-        engines.append({"engine": engine, "n_fail": n_fail,
-                        "text": f"{engine} {version}".strip() + f": {len(g)} checks, "
-                                + (f"{n_fail} FAILED" if n_fail else "none failed")})
+        text = (f"{engine}: not installed (optional extra: pip install 'gpme[{engine}]'), "
+                "not compared" if version == NOT_INSTALLED else
+                f"{engine} {version}".strip() + f": {len(g)} checks, "
+                + (f"{n_fail} FAILED" if n_fail else "none failed"))
+        engines.append({"engine": engine, "n_fail": n_fail, "text": text})
     if diff and diff.get("previous") is not None:
         changes = headline(diff).split(": ", 1)[-1]
         changes = f"{changes} (against {diff['previous'].get('run_id') or diff['previous'].get('source')})"
