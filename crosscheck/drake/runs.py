@@ -1,0 +1,157 @@
+"""Free-motion runs of a scenario in Drake, with Drake's own Simulator and integrator, gated
+by both engines' errors measured by step halving (crosscheck.halving_gates).
+
+The model runs without its constraints, drives on (crosscheck.mujoco.cases.free_variant:
+the crane gets the holding springs that keep its free arm in the slider's stroke, the same
+in both engines).  Drake: the continuous MultibodyPlant of the URDF gpme wrote
+(crosscheck.drake.model.for_model), the drives t(t) fed to its applied generalized force
+input port by a LeafSystem, integrated by ``Simulator`` with Drake's ``runge_kutta5``
+(Dormand-Prince 5(4), FSAL, 7 stages) in fixed-step mode at h, h/2 and h/4, the state
+recorded by a monitor at the output times.  gpme: classical RK4 at h, h/2, h/4
+(crosscheck.run_gates.refined_gpme_runs, which may halve h until gpme's own order is
+observed; Drake then runs at that h).
+
+Why fixed steps: an error-controlled run has no step to halve, so its error could only be
+bounded by its own tolerance, which is a local, not a global, error.  With fixed steps
+Drake's global error at h/4 is estimated from its own three runs, (x_h/2 - x_h/4) /
+(2^(p-1) - 1) at the lowest order the order row accepts (p - 1 = 4), as gpme's is
+(p - 1 = 3); the two finest runs must agree within the sum of both estimates plus round-off
+floors.  No gpme kinematics, dynamics or integration code runs on Drake's side.
+"""
+import time
+from typing import Optional
+
+import numpy as np
+import pandas as pd
+from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
+
+from gpme_core.errors import SimulationError
+
+from .. import halving_gates, run_gates
+from ..compare import Tolerance, compare
+from ..mujoco.cases import free_variant
+from ..pinocchio.runs import run_step, run_t_end
+from .model import DrakeSystem, for_model
+
+ENGINE = "drake"
+FREE = "free run"
+OUTPUT_DT = 1e-2            # s, spacing of the compared samples
+SCHEME = "runge_kutta5"     # pydrake.systems.analysis.GetIntegrationSchemes()
+SCHEME_TEXT = "Runge-Kutta 5 (Dormand-Prince), fixed step"
+SCHEME_ORDER = 5.0
+
+
+class _Drives(LeafSystem):
+    """Output: the gpme model's drive forces t(t) (N, N m) in Drake's velocity order."""
+
+    def __init__(self, model, ds: DrakeSystem):
+        super().__init__()
+        self._model, self._ds = model, ds
+        self.DeclareVectorOutputPort("drives", ds.plant.num_velocities(), self._calc)
+
+    def _calc(self, context, output):
+        output.SetFromVector(self._ds.to_drake(self._model.drive_forces(context.get_time())))
+
+
+def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir,
+                   drake_system: Optional[DrakeSystem] = None) -> pd.DataFrame:
+    """The scenario's model (run as it is: no constraints) from (q0, q_dot0), integrated by
+    Drake's Simulator with runge_kutta5 at the fixed step dt (s) to t_end (s).
+
+    output_dt : s, a whole number of steps dt (the samples are the steps nearest k output_dt)
+    urdf_dir  : where the URDF Drake reads is written (for_model)
+    drake_system : a fresh, not yet used DrakeSystem to run instead (tests perturb it)
+    Returns columns t (s), every coordinate (rad, m) and <name>_dot; attrs: engine, dt,
+    steps, derivative_evaluations, wall_time_s.
+    """
+    model = scenario.model
+    ds = drake_system or for_model(model, urdf_dir, scenario.name)
+    builder = DiagramBuilder()
+    plant = builder.AddSystem(ds.plant)
+    port = plant.get_applied_generalized_force_input_port()
+    if model.drives:
+        drives = builder.AddSystem(_Drives(model, ds))
+        builder.Connect(drives.get_output_port(), port)
+    else:
+        builder.ExportInput(port, "applied")
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    root = simulator.get_mutable_context()
+    if not model.drives:
+        diagram.get_input_port(0).FixValue(root, np.zeros(plant.num_velocities()))
+    context = plant.GetMyMutableContextFromRoot(root)
+    plant.SetPositions(context, ds.q_drake(scenario.q0))
+    plant.SetVelocities(context, ds.to_drake(scenario.q_dot0))
+    integrator = ResetIntegratorFromFlags(simulator, SCHEME, dt)
+    integrator.set_fixed_step_mode(True)
+    n_out = int(round(t_end / output_dt))
+    names = list(model.coordinate_names)
+    samples = np.full((n_out + 1, 1 + 2 * len(names)), np.nan)
+
+    def monitor(root_context):
+        t = root_context.get_time()
+        k = int(round(t / output_dt))
+        if abs(t - k * output_dt) < 0.25 * dt and 0 <= k <= n_out:   # the last step wins
+            samples[k] = [t, *ds.to_gpme(plant.GetPositions(context)),
+                          *ds.to_gpme(plant.GetVelocities(context))]
+        return EventStatus.Succeeded()
+
+    simulator.set_monitor(monitor)
+    start = time.perf_counter()
+    try:
+        simulator.Initialize()
+        simulator.AdvanceTo(t_end)
+    except RuntimeError as exc:
+        raise SimulationError(f"Drake's run of {scenario.name} stopped at t = "
+                              f"{root.get_time():.6g} s (dt = {dt:g} s): {exc}") from None
+    if not np.all(np.isfinite(samples)):
+        bad = int(np.argmax(~np.all(np.isfinite(samples), axis=1)))
+        raise SimulationError(f"Drake's run of {scenario.name} (dt = {dt:g} s) has no finite "
+                              f"sample at t = {bad * output_dt:.6g} s (diverged, or the output "
+                              "times are not whole steps)")
+    df = pd.DataFrame(samples, columns=["t", *names, *(f"{c}_dot" for c in names)])
+    df.attrs.update(engine=ENGINE, dt=dt, steps=int(integrator.get_num_steps_taken()),
+                    derivative_evaluations=int(integrator.get_num_derivative_evaluations()),
+                    wall_time_s=time.perf_counter() - start)
+    return df
+
+
+def halved_drake_runs(scenario, t_end: float, dt: float, output_dt: float,
+                      urdf_dir) -> halving_gates.HalvedRuns:
+    """Drake's runs at dt, dt/2, dt/4 (s) as crosscheck.halving_gates.HalvedRuns."""
+    runs = tuple(drake_free_run(scenario, t_end, dt / k, output_dt, urdf_dir)
+                 for k in (1, 2, 4))
+    return halving_gates.HalvedRuns(ENGINE, SCHEME_TEXT, SCHEME_ORDER, runs, dt)
+
+
+def state_columns(model) -> list:
+    names = list(model.coordinate_names)
+    return names + [f"{c}_dot" for c in names]
+
+
+def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
+    """Rows (crosscheck.compare dicts) of the free run of ``scenario`` in Drake against
+    gpme: one per state column (the two finest runs, gated by both engines' halving errors
+    and round-off floors, crosscheck.halving_gates.run_rows) and one observed-order row per
+    engine; or one information row when the run is over run_gates' step budget."""
+    import tempfile
+    log = log or (lambda msg: None)
+    free = free_variant(scenario)
+    t_end, dt = run_t_end(scenario, quick), run_step(scenario)
+    skip = run_gates.over_budget(t_end, dt)
+    if skip:
+        log(f"{FREE} {free.name}: {skip}")
+        return [compare(ENGINE, free.name, f"{FREE}: not run", f"{t_end:g} s, dt = {dt:.3g} s",
+                        [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {skip}"), ["-"])]
+    refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_end, dt,
+                                          OUTPUT_DT)
+    with tempfile.TemporaryDirectory() as tmp:
+        drake = halved_drake_runs(free, t_end, refined.dt, OUTPUT_DT, urdf_dir or tmp)
+    case = (f"{FREE}, drive on, {t_end:g} s; gpme RK4 and Drake {SCHEME} at dt = "
+            f"{refined.dt:g}, dt/2, dt/4 s (compared: dt/4)")
+    rows = halving_gates.run_rows(ENGINE, free, halving_gates.from_refined(refined), drake,
+                                  state_columns(free.model), FREE, case)
+    log(f"{FREE} {free.name}: gpme x3 {sum(r.attrs.get('wall_time_s', 0.0) for r in refined.runs):.1f} s, "
+        f"drake x3 {sum(r.attrs['wall_time_s'] for r in drake.runs):.1f} s")
+    return rows
