@@ -1,8 +1,8 @@
 """The Drake crosscheck (crosscheck/drake/): terms of a MultibodyPlant read from gpme's URDF
 against gpme's terms, sign conventions against hand-derived values, free runs with Drake's
 own integrator, and proof that the check fails when one side is perturbed."""
+import dataclasses
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -12,7 +12,7 @@ pytest.importorskip("pydrake")
 
 from crosscheck.drake import check as dc                      # noqa: E402
 from crosscheck.drake import runs as dr                       # noqa: E402
-from crosscheck.drake.model import for_model, from_urdf       # noqa: E402
+from crosscheck.drake.model import from_urdf                  # noqa: E402
 from crosscheck.pinocchio.check import QUICK, State, scenario_states   # noqa: E402
 from crosscheck.reports.rows import read_rows                 # noqa: E402
 from gpme_core.errors import ModelFileError                   # noqa: E402
@@ -272,6 +272,21 @@ def test_free_run_rows_pass_and_orders_are_observed(tmp_path):
     # Drake's run is really its own: it differs from gpme's by more than round-off
     run_rows = rows[~rows["quantity"].str.contains("observed order")]
     assert run_rows["abs_error"].max() > 1e-12
+
+
+def test_a_free_run_leaving_a_joint_range_is_shortened_or_reported(tmp_path):
+    """pitch starts at 0.3 rad, 20 rad/s towards its limit 1.5 rad: gpme stops the run at
+    ~0.067 s, so the free run is compared over 0.05 s; at 200 rad/s not even that runs,
+    which is one information row."""
+    fast = dataclasses.replace(small_scenario(dt=4e-3), q_dot0=np.array([0.5, 0.0, 20.0, 1.0]))
+    rows = pd.DataFrame(dr.run_section(fast, quick=True, urdf_dir=tmp_path))
+    assert (rows["status"] == "pass").all()
+    assert "0.05 s (shortened from 0.2 s" in rows["case"].iloc[0]
+    assert "pitch = 1.5" in rows["case"].iloc[0]
+    faster = dataclasses.replace(fast, q_dot0=np.array([0.5, 0.0, 200.0, 1.0]))
+    rows = dr.run_section(faster, quick=True, urdf_dir=tmp_path)
+    assert len(rows) == 1 and rows[0]["status"] == "info"
+    assert "cannot be run for 0.05 s" in rows[0]["reason"]
 
 
 def test_a_perturbed_drake_run_fails(tmp_path):

@@ -26,7 +26,7 @@ import pandas as pd
 from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
 from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 
-from gpme_core.errors import SimulationError
+from gpme_core.errors import ConstraintError, SimulationError
 
 from .. import halving_gates, run_gates
 from ..compare import Tolerance, compare
@@ -40,6 +40,7 @@ OUTPUT_DT = 1e-2            # s, spacing of the compared samples
 SCHEME = "runge_kutta5"     # pydrake.systems.analysis.GetIntegrationSchemes()
 SCHEME_TEXT = "Runge-Kutta 5 (Dormand-Prince), fixed step"
 SCHEME_ORDER = 5.0
+MIN_FREE_T_END = 0.05       # s, shortest free run compared (5 output samples)
 
 
 class _Drives(LeafSystem):
@@ -130,6 +131,30 @@ def state_columns(model) -> list:
     return names + [f"{c}_dot" for c in names]
 
 
+def _gpme_free_runs(free, t_end: float, dt: float) -> tuple:
+    """(RefinedRuns or None, run length s, note): gpme's runs at h, h/2, h/4 of the free
+    model over t_end, or over t_end / 2, / 4, ... (whole output samples, at least
+    MIN_FREE_T_END) when gpme stops the run (a free arm falls out of a joint's range, which
+    gpme refuses and Drake's continuous plant would not notice); None when even the shortest
+    cannot be run (the note says why)."""
+    t_run, last = t_end, ""
+    while True:
+        try:
+            refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_run,
+                                                  dt, OUTPUT_DT)
+        except (SimulationError, ConstraintError) as exc:   # diverged, or left a joint range
+            shorter = round(t_run / 2.0 / OUTPUT_DT) * OUTPUT_DT
+            if shorter < MIN_FREE_T_END:
+                return None, t_run, (f"the free motion cannot be run for {MIN_FREE_T_END:g} s: "
+                                     f"{exc}")
+            last = str(exc)
+            t_run = shorter
+            continue
+        note = "" if t_run == t_end else (f" (shortened from {t_end:g} s: gpme stopped the "
+                                          f"longer run: {last.split(': the mechanism')[0][:200]})")
+        return refined, t_run, note
+
+
 def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
     """Rows (crosscheck.compare dicts) of the free run of ``scenario`` in Drake against
     gpme: one per state column (the two finest runs, gated by both engines' halving errors
@@ -144,14 +169,18 @@ def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
         log(f"{FREE} {free.name}: {skip}")
         return [compare(ENGINE, free.name, f"{FREE}: not run", f"{t_end:g} s, dt = {dt:.3g} s",
                         [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {skip}"), ["-"])]
-    refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_end, dt,
-                                          OUTPUT_DT)
+    refined, t_run, why = _gpme_free_runs(free, t_end, dt)
+    if refined is None:
+        log(f"{FREE} {free.name}: {why}")
+        return [compare(ENGINE, free.name, f"{FREE}: not run", f"{t_end:g} s, dt = {dt:.3g} s",
+                        [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {why}"), ["-"])]
     with tempfile.TemporaryDirectory() as tmp:
-        drake = halved_drake_runs(free, t_end, refined.dt, OUTPUT_DT, urdf_dir or tmp)
-    case = (f"{FREE}, drive on, {t_end:g} s; gpme RK4 and Drake {SCHEME} at dt = "
+        drake = halved_drake_runs(free, t_run, refined.dt, OUTPUT_DT, urdf_dir or tmp)
+    case = (f"{FREE}, drive on, {t_run:g} s{why}; gpme RK4 and Drake {SCHEME} at dt = "
             f"{refined.dt:g}, dt/2, dt/4 s (compared: dt/4)")
     rows = halving_gates.run_rows(ENGINE, free, halving_gates.from_refined(refined), drake,
                                   state_columns(free.model), FREE, case)
-    log(f"{FREE} {free.name}: gpme x3 {sum(r.attrs.get('wall_time_s', 0.0) for r in refined.runs):.1f} s, "
-        f"drake x3 {sum(r.attrs['wall_time_s'] for r in drake.runs):.1f} s")
+    gpme_s = sum(r.attrs.get("wall_time_s", 0.0) for r in refined.runs)
+    drake_s = sum(r.attrs["wall_time_s"] for r in drake.runs)
+    log(f"{FREE} {free.name}: {t_run:g} s, gpme x3 {gpme_s:.1f} s, drake x3 {drake_s:.1f} s")
     return rows
