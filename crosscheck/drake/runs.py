@@ -6,8 +6,12 @@ the crane gets the holding springs that keep its free arm in the slider's stroke
 in both engines).  Drake: the continuous MultibodyPlant of the URDF gpme wrote
 (crosscheck.drake.model.for_model), the drives t(t) fed to its applied generalized force
 input port by a LeafSystem, integrated by ``Simulator`` with Drake's ``runge_kutta5``
-(Dormand-Prince 5(4), FSAL, 7 stages) in fixed-step mode at h, h/2 and h/4, the state
-recorded by a monitor at the output times.  gpme: classical RK4 at h, h/2, h/4
+(Dormand-Prince 5(4), FSAL, 7 stages) in fixed-step mode at h, h/2 and h/4, advanced to
+each output time k output_dt in turn (``AdvanceTo``) and the state recorded there.  Drake's
+clock adds h at every step, so within an interval it drifts from k h by a few roundings;
+at each output time the simulator ends exactly on the requested time (with a step of the
+drift's size where needed), so the samples are at gpme's output times, not ~N eps t
+(times |q_dot|, up to 1e-14 m here) away from them.  gpme: classical RK4 at h, h/2, h/4
 (crosscheck.run_gates.refined_gpme_runs, which may halve h until gpme's own order is
 observed; Drake then runs at that h).
 
@@ -24,7 +28,7 @@ from typing import Optional
 import numpy as np
 import pandas as pd
 from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
-from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
 from gpme_core.errors import ConstraintError, SimulationError
 
@@ -60,7 +64,7 @@ def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir
     """The scenario's model (run as it is: no constraints) from (q0, q_dot0), integrated by
     Drake's Simulator with runge_kutta5 at the fixed step dt (s) to t_end (s).
 
-    output_dt : s, a whole number of steps dt (the samples are the steps nearest k output_dt)
+    output_dt : s, a whole number of steps dt
     urdf_dir  : where the URDF Drake reads is written (for_model)
     drake_system : a fresh, not yet used DrakeSystem to run instead (tests perturb it)
     Returns columns t (s), every coordinate (rad, m) and <name>_dot; attrs: engine, dt,
@@ -90,27 +94,24 @@ def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir
     names = list(model.coordinate_names)
     samples = np.full((n_out + 1, 1 + 2 * len(names)), np.nan)
 
-    def monitor(root_context):
-        t = root_context.get_time()
-        k = int(round(t / output_dt))
-        if abs(t - k * output_dt) < 0.25 * dt and 0 <= k <= n_out:   # the last step wins
-            samples[k] = [t, *ds.to_gpme(plant.GetPositions(context)),
-                          *ds.to_gpme(plant.GetVelocities(context))]
-        return EventStatus.Succeeded()
+    def record(k):
+        samples[k] = [root.get_time(), *ds.to_gpme(plant.GetPositions(context)),
+                      *ds.to_gpme(plant.GetVelocities(context))]
 
-    simulator.set_monitor(monitor)
     start = time.perf_counter()
     try:
         simulator.Initialize()
-        simulator.AdvanceTo(t_end)
+        record(0)
+        for k in range(1, n_out + 1):
+            simulator.AdvanceTo(k * output_dt)
+            record(k)
     except RuntimeError as exc:
         raise SimulationError(f"Drake's run of {scenario.name} stopped at t = "
                               f"{root.get_time():.6g} s (dt = {dt:g} s): {exc}") from None
     if not np.all(np.isfinite(samples)):
         bad = int(np.argmax(~np.all(np.isfinite(samples), axis=1)))
-        raise SimulationError(f"Drake's run of {scenario.name} (dt = {dt:g} s) has no finite "
-                              f"sample at t = {bad * output_dt:.6g} s (diverged, or the output "
-                              "times are not whole steps)")
+        raise SimulationError(f"Drake's run of {scenario.name} (dt = {dt:g} s) diverged: no "
+                              f"finite state at t = {bad * output_dt:.6g} s")
     df = pd.DataFrame(samples, columns=["t", *names, *(f"{c}_dot" for c in names)])
     df.attrs.update(engine=ENGINE, dt=dt, steps=int(integrator.get_num_steps_taken()),
                     derivative_evaluations=int(integrator.get_num_derivative_evaluations()),
