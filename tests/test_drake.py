@@ -236,10 +236,11 @@ def test_a_root_that_is_not_world_is_welded_not_floated(tmp_path):
     path = tmp_path / "arm.urdf"
     write_urdf(model, path)
     moved = tmp_path / "rooted.urdf"
-    moved.write_text(path.read_text().replace('"world"', '"base_link"'))
+    moved.write_text(path.read_text().replace('"world"', '"base_link"').replace(
+        '<joint name="roll" type="revolute">', '<joint name="roll" type="continuous">'))
     ds = from_urdf(moved, model.coordinate_names, ["tool"], side_file=side_file_path(path))
     assert ds.welded_root == "base_link"
-    assert ds.plant.num_positions() == ds.plant.num_velocities() == 4
+    assert ds.plant.num_positions() == ds.plant.num_velocities() == 4   # continuous: nq = 1
 
 
 # --------------------------------------------------------------------------- overrides

@@ -33,6 +33,7 @@ here: only data (the URDF text and the side file) and names.
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
@@ -286,8 +287,15 @@ def from_urdf(urdf_path, coordinate_names: Sequence[str], body_names: Sequence[s
     if welded:
         notes.append(f"root link {welded!r} welded to the world (Drake would float it)")
     notes += [f"Drake's parser warned: {w}" for w in warnings.messages]
-    return DrakeSystem(plant, tuple(coordinate_names), q_index, v_index, bodies, stiffness,
-                       reference, damping, g, urdf_path, welded, tuple(notes))
+    return DrakeSystem(plant, tuple(coordinate_names), _read_only(q_index),
+                       _read_only(v_index), MappingProxyType(bodies), _read_only(stiffness),
+                       _read_only(reference), _read_only(damping), _read_only(g), urdf_path,
+                       welded, tuple(notes))
+
+
+def _read_only(a: NDArray) -> NDArray:
+    a.setflags(write=False)
+    return a
 
 
 def for_model(model, urdf_dir, name: Optional[str] = None) -> DrakeSystem:
