@@ -27,6 +27,9 @@ crosscheck.compare.compare:
                                                                        output port, drives on
                                                                        the applied generalized
                                                                        force input port
+    inverse dynamics tau terms.t (the drives)                          CalcInverseDynamics at
+                                                                       gpme's free q_ddot, force
+                                                                       elements as external forces
 
 "Force elements" is ``CalcForceElementsContribution`` turned into generalized forces by
 ``CalcGeneralizedForces``: it holds gravity (as body forces of the UniformGravityFieldElement),
@@ -84,6 +87,13 @@ TOLERANCES = {
                                "vs the <dynamics damping> Drake's parser read, applied as its "
                                "joint damping): exact up to a few roundings" + _SPLIT +
                                " (N, N m)"),
+    "inverse dynamics tau": Tolerance(1e-12, 1e-11, "residual check, round-off only: gpme's "
+                                      "q_ddot comes from a backward-stable solve, so M q_ddot "
+                                      "- (h + Q) is ~eps |M| |q_ddot| whatever cond(M), and "
+                                      "Drake's Newton-Euler recursion forms M a + C v - tau_g - "
+                                      "force elements in ~n steps; relative to the largest term "
+                                      "of that balance (the row's scale), 1e-11 as for the bias "
+                                      "term, whose cancellation it contains (N, N m)"),
     "frame position": PIN_TOLERANCES["frame position"],
     "frame velocity": PIN_TOLERANCES["frame velocity"],
     "frame jacobian": PIN_TOLERANCES["frame jacobian"],
@@ -246,7 +256,27 @@ def compare_state(case: DrakeCase, state) -> list:
                                           np.arange(len(q)), np.zeros(0, dtype=int)),
                        **case.overrides})
     add("free q_ddot", sol.q_ddot, d["q_ddot"], coords)
+    tau, scale = inverse_dynamics(ds, ctx, q, qd, sol.q_ddot, d)
+    add("inverse dynamics tau", terms.t, tau, coords, scale)
     return rows
+
+
+def inverse_dynamics(ds: DrakeSystem, context, q, q_dot, q_ddot, terms: dict) -> tuple:
+    """(tau (n,) N or N m, scale N or N m): the applied generalized forces Drake's
+    ``CalcInverseDynamics`` needs for the accelerations q_ddot (n,) (gpme's) at (q, q_dot),
+    with the force elements (gravity, springs, joint damping) as external forces: tau = M
+    q_ddot + C v - tau_g - springs - dampers, which must be the drives t.  scale: the largest
+    term of that balance (|M q_ddot| from Drake's M in ``terms``, |C v|, |tau_g|, |springs|,
+    |dampers|), the size its round-off is relative to."""
+    plant = ds.plant
+    plant.SetPositions(context, ds.q_drake(q))
+    plant.SetVelocities(context, ds.to_drake(q_dot))
+    forces = MultibodyForces(plant)
+    plant.CalcForceElementsContribution(context, forces)
+    tau = ds.to_gpme(plant.CalcInverseDynamics(context, ds.to_drake(q_ddot), forces))
+    parts = [terms["M"] @ np.asarray(q_ddot, float), terms["bias"], terms["tau_g"],
+             terms["springs"], terms["dampers"]]
+    return tau, float(max(np.abs(p).max(initial=0.0) for p in parts))
 
 
 def compare_case(case: DrakeCase, states: Sequence) -> pd.DataFrame:
