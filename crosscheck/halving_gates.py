@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from .compare import Tolerance, compare
-from .run_gates import ORDER_TOLERANCE, RESOLVED, RefinedRuns, column_unit, roundoff_floor
+from .run_gates import EPS, ORDER_TOLERANCE, RESOLVED, RefinedRuns, column_unit
 
 HALVINGS = 3            # runs at h, h/2, h/4
 TIME_MATCH_S = 1e-9     # s: output times of two runs are the same sample when this close
@@ -99,11 +99,37 @@ class HalvedRuns:
         order p - 1: max|x_h/2 - x_h/4| / (2^(p-1) - 1)."""
         return self.differences(column)[1] / (2.0 ** (self.order - ORDER_TOLERANCE) - 1.0)
 
-    def floor(self, column: str, reference: pd.DataFrame) -> float:
-        """Round-off (crosscheck.run_gates.roundoff_floor over the finest run's steps, scale
-        the largest |x| of ``reference``'s column) plus the solver floor, column's unit."""
-        scale = float(np.abs(reference[column].to_numpy(float)).max(initial=0.0))
-        return roundoff_floor(scale, self.n_steps) / 2.0 + float(self.solver_floor.get(column, 0.0))
+    def floor(self, column: str, model) -> float:
+        """This engine's round-off in ``column`` over its finest run, plus its solver floor
+        (column's unit); the terms of crosscheck.run_gates.column_floor for one engine:
+
+        - own:   eps N (|x|max + coupled): each of the N steps rounds the update once,
+                 relative to the component and to the rate that updates it (coupled = h
+                 max|q_dot| for a coordinate, h max|q_ddot| for a velocity, from the run);
+                 a multiplier carries the solve's eps cond(M) |x| (attrs max_cond_M);
+        - cross: eps sqrt(N) max|state of that kind|: round-off of the solve that mixes all
+                 components, without sign, so a random walk; it decides for a coordinate
+                 the motion leaves at ~0 (an RFEM torsion of a planar motion).
+        model: the gpme model (coordinate names); None treats every column as a plain one.
+        """
+        run = self.finest
+        x = run[column].to_numpy(float)
+        scale = float(np.abs(x).max(initial=0.0))
+        n, h = self.n_steps, self.finest_dt
+        names = list(model.coordinate_names) if model is not None else []
+        velocities = [f"{c}_dot" for c in names]
+        coupled, cond, kind = 0.0, 0.0, None
+        if column in names:
+            coupled = h * _max_abs(run, velocities)
+            kind = names
+        elif column in velocities:
+            coupled = h * _max_rate(run, velocities)
+            kind = velocities
+        elif column.startswith("lambda_"):
+            cond = float(run.attrs.get("max_cond_M", 0.0))
+        own = EPS * (n * (scale + coupled) + cond * scale)
+        cross = EPS * np.sqrt(n) * _max_abs(run, kind) if kind else 0.0
+        return own + cross + float(self.solver_floor.get(column, 0.0))
 
     def observed_order(self, columns: Sequence[str], floors: Mapping[str, float]):
         """(p_obs, column, resolved): the smallest log2 ratio of successive differences over
@@ -123,6 +149,23 @@ class HalvedRuns:
         return closest[0], closest[1], False
 
 
+def _max_abs(run: pd.DataFrame, columns) -> float:
+    """Largest |value| over ``columns`` of ``run`` (those it has)."""
+    cols = [c for c in columns if c in run.columns]
+    return float(np.abs(run[cols].to_numpy(float)).max(initial=0.0)) if cols else 0.0
+
+
+def _max_rate(run: pd.DataFrame, columns) -> float:
+    """Largest |d/dt| over ``columns`` of ``run`` by differences of its samples (the
+    recorded accelerations' size for the velocity columns)."""
+    cols = [c for c in columns if c in run.columns]
+    t = run["t"].to_numpy(float)
+    if not cols or len(t) < 2:
+        return 0.0
+    dt = np.diff(t)[:, None]
+    return float(np.abs(np.diff(run[cols].to_numpy(float), axis=0) / dt).max(initial=0.0))
+
+
 def from_refined(refined: RefinedRuns) -> HalvedRuns:
     """gpme's RK4 runs at h, h/2, h/4 (crosscheck.run_gates.refined_gpme_runs) as HalvedRuns."""
     return HalvedRuns("gpme", "classical RK4", 4.0, tuple(refined.runs), refined.dt)
@@ -135,7 +178,7 @@ def gate(gpme: HalvedRuns, other: HalvedRuns, column: str, model, override=None)
         return Tolerance(override.abs, override.rel,
                          f"override from the model file: {override.reason}")
     e_g, e_o = gpme.error(column), other.error(column)
-    f_g, f_o = gpme.floor(column, gpme.finest), other.floor(column, other.finest)
+    f_g, f_o = gpme.floor(column, model), other.floor(column, model)
     unit = column_unit(model, column) if model is not None else ""
     solver = float(other.solver_floor.get(column, 0.0))
     return Tolerance(
@@ -144,15 +187,17 @@ def gate(gpme: HalvedRuns, other: HalvedRuns, column: str, model, override=None)
         f"the lowest order the order rows accept (p - 1): {gpme.engine} {gpme.scheme} (p = "
         f"{gpme.order:g}) at dt = {gpme.finest_dt:.3g} s: {e_g:.2e} {unit}; {other.engine} "
         f"{other.scheme} (p = {other.order:g}) at dt = {other.finest_dt:.3g} s: {e_o:.2e} "
-        f"{unit}; + round-off eps N |x|max per engine ({f_g + f_o - solver:.2e}) + "
+        f"{unit}; + round-off per engine, eps (N (|x|max + h |rate|max) + sqrt(N) "
+        f"|state|max) ({f_g + f_o - solver:.2e}) + "
         f"{other.engine}'s solver-tolerance floor ({solver:.2e})")
 
 
 def order_row(engine: str, scenario_name: str, runs: HalvedRuns, columns: Sequence[str],
-              label: str, case: str) -> dict:
+              label: str, case: str, model=None) -> dict:
     """Row of one engine's observed order over its three runs (validates its error
-    estimate); information only when no column's h/2 - h/4 difference is resolved."""
-    floors = {c: runs.floor(c, runs.finest) for c in columns}
+    estimate); information only when no column's h/2 - h/4 difference is resolved.
+    model: the gpme model (the floors' coupling terms; see HalvedRuns.floor)."""
+    floors = {c: runs.floor(c, model) for c in columns}
     p, col, resolved = runs.observed_order(columns, floors)
     quantity = f"{label}: observed order of {runs.engine} ({runs.scheme})"
     if not resolved:
@@ -191,6 +236,6 @@ def run_rows(engine: str, scenario, gpme: HalvedRuns, other: HalvedRuns,
         tol = gate(gpme, other, c, scenario.model, scenario.tolerance(engine, quantity))
         rows.append(compare(engine, scenario.name, quantity, case, g[c].to_numpy(float),
                             o[c].to_numpy(float), tol, times))
-    rows.append(order_row(engine, scenario.name, gpme, columns, label, case))
-    rows.append(order_row(engine, scenario.name, other, columns, label, case))
+    rows.append(order_row(engine, scenario.name, gpme, columns, label, case, scenario.model))
+    rows.append(order_row(engine, scenario.name, other, columns, label, case, scenario.model))
     return rows
