@@ -82,9 +82,9 @@ class ProgrammedConstraints:
 
     def _kinematics(self, q, q_dot):
         pm, data = self.ps.model, self.data
-        pin.forwardKinematics(pm, data, self.ps.q_pin(q), self.ps.to_pin(q_dot),
-                              np.zeros(pm.nv))
-        pin.computeJointJacobians(pm, data, self.ps.q_pin(q))
+        q_pin = self.ps.q_pin(q)
+        pin.forwardKinematics(pm, data, q_pin, self.ps.to_pin(q_dot), np.zeros(pm.nv))
+        pin.computeJointJacobians(pm, data, q_pin)
         pin.updateFramePlacements(pm, data)
 
     def evaluate(self, t: float, q: NDArray, q_dot: Optional[NDArray] = None):
