@@ -77,3 +77,29 @@ def test_bad_inputs_are_refused_with_the_value():
         HalvedRuns("x", "RK4", 4.0, tuple(shifted), H)
     with pytest.raises(ValueError, match="positive step"):
         HalvedRuns("x", "RK4", 4.0, runs(4.0, 1.0), -1.0)
+
+
+def test_a_coordinate_left_at_zero_is_gated_by_the_round_off_of_the_whole_state():
+    """A coordinate the motion leaves at ~0 (an RFEM torsion of a planar motion) differs
+    between engines by the round-off of the solve that mixes it with the large ones:
+    eps sqrt(N) max|q| (here ~4e-15 rad), not eps N |q_torsion| (~1e-31)."""
+    names = ["big", "torsion"]
+    model = SimpleNamespace(coordinate_names=names, is_revolute=[True, True], index=names.index)
+
+    def engine(name, order, c, noise_seed):
+        rng = np.random.default_rng(noise_seed)
+        out = []
+        for k in range(3):
+            big = exact(T) + c * (H / 2 ** k) ** order * T
+            out.append(pd.DataFrame({"t": T, "big": big, "torsion": 1e-18 * rng.standard_normal(len(T)),
+                                     "big_dot": 3 * np.cos(3 * T), "torsion_dot": 0 * T}))
+        return HalvedRuns(name, "scheme", order, tuple(out), H)
+
+    gpme, other = engine("gpme", 4.0, 50.0, 1), engine("drake", 5.0, 1e3, 2)
+    scenario = SimpleNamespace(name="synthetic", model=model, tolerance=lambda e, q: None)
+    rows = run_rows("drake", scenario, gpme, other, ["torsion"], "free run", "case")
+    assert rows[0]["status"] == "pass"
+    assert 1e-16 < rows[0]["tol_abs"] < 1e-13
+    # without the model's coordinates the floor is the column's own round-off only: fails
+    plain = SimpleNamespace(name="synthetic", model=None, tolerance=lambda e, q: None)
+    assert run_rows("drake", plain, gpme, other, ["torsion"], "free run", "case")[0]["status"] == "fail"
