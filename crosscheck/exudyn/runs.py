@@ -223,29 +223,13 @@ def _phi_floors(df, constraint_names, n_steps) -> dict:
     return {c: roundoff_floor(float(scale.get(c, 0.0)), n_steps) for c in constraint_names}
 
 
-def gpme_floors(refined, scenario, columns_compared, exudyn_finest) -> dict:
-    """{column: round-off floor of gpme's finest run} beyond halving_gates' eps N |x|max:
-    crosscheck.run_gates.column_floor of the finest run (N = 4 x the coarse run's steps
-    at h/4): a state column also carries the round-off of the rate that updates it, which
-    is computed from the whole state (a solve with M mixes every component), and the
-    cross-talk of the largest state component; it decides for columns far smaller than the
-    rest of the state (the crane's RFEM torsion, ~1e-14 rad: pure round-off); for Phi the
-    round-off of its terms (:func:`_phi_floors`, scale from Exudyn's run, the same
-    positions up to the compared errors)."""
-    from dataclasses import replace
-
-    from ..run_gates import column_floor
-    names = list(scenario.model.coordinate_names)
-    fine = replace(refined, dt=refined.dt / 4.0, n_steps=4 * refined.n_steps)
-    df = refined.finest.copy()
-    velocities = df[[f"{c}_dot" for c in names]].to_numpy(float)
-    df.attrs["max_abs_q_ddot"] = float(np.abs(np.diff(velocities, axis=0)).max(initial=0.0)
-                                       / max(refined.output_dt, 1e-300))
+def gpme_floors(scenario, columns_compared, exudyn_finest, n_steps) -> dict:
+    """{Phi column: round-off floor of gpme's finest run (n_steps)} beyond halving_gates'
+    floor, which takes the column's own |x|max as the scale: Phi is ~0 on the manifold but
+    formed from terms of size phi_scale (:func:`_phi_floors`, the scale from Exudyn's run:
+    the same positions up to the compared errors)."""
     cons = [c for c in scenario.system.constraint_names if c in columns_compared]
-    out = {c: column_floor(fine, df, c, scenario.model) for c in columns_compared
-           if c not in cons and not c.startswith("lambda_")}
-    out.update(_phi_floors(exudyn_finest, cons, fine.n_steps))
-    return out
+    return _phi_floors(exudyn_finest, cons, n_steps)
 
 
 def halved_runs(scenario, t_end: float, columns_compared, dt: float = EXUDYN_DT,
@@ -279,7 +263,7 @@ def halved_runs(scenario, t_end: float, columns_compared, dt: float = EXUDYN_DT,
     halvings = 0
     while True:
         trial = HalvedRuns(ENGINE, SCHEME, ORDER, tuple(runs), dt)
-        floors = {c: trial.floor(c, trial.finest) for c in state_cols}
+        floors = {c: trial.floor(c, scenario.model) for c in state_cols}
         p, col, resolved = trial.observed_order(state_cols, floors)
         if not resolved or abs(p - ORDER) <= 1.0 or halvings >= max_halvings:
             break
@@ -369,8 +353,8 @@ def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: float 
     cols = exact_columns(scenario)
     exu_runs, info = halved_runs(scenario, t_end, cols, exudyn_dt, OUTPUT_DT, log=log, **run_kw)
     gpme_runs = halving_gates.from_refined(refined)
-    gpme_runs = replace(gpme_runs, solver_floor=gpme_floors(refined, scenario, cols,
-                                                            exu_runs.finest))
+    gpme_runs = replace(gpme_runs, solver_floor=gpme_floors(scenario, cols, exu_runs.finest,
+                                                            gpme_runs.n_steps))
     case = (f"{EXACT}, {t_end:g} s, gpme RK4 dt = {gpme_runs.finest_dt:.3g} s, Exudyn "
             f"generalized-alpha dt = {exu_runs.finest_dt:.3g} s "
             f"({exu_runs.finest.attrs['solver']})")
