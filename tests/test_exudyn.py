@@ -204,3 +204,12 @@ def test_check_run_writes_rows_and_page(tmp_path, rigid_crane):
     import exudyn
     assert f"Exudyn {exudyn.__version__}" in page
     assert (tmp_path / "checks" / "exudyn").is_dir()
+
+
+def test_check_run_turns_a_refused_run_into_a_failed_row(tmp_path):
+    # the paper's own start is off the constraints: one failed row naming them, no traceback
+    off = replace(crane_scenario(0), quick_t_end=0.1)
+    df = exu_check.run(tmp_path, scenarios=[off], quick=True, sections=("runs",))
+    assert len(df) == 1 and df["status"].iloc[0] == "fail"
+    assert "not on the programmed constraints" in df["reason"].iloc[0]
+    assert "Phi_1" in df["reason"].iloc[0]

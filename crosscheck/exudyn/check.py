@@ -135,7 +135,8 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
         if "runs" in sections:
             try:
                 rows += exu_runs.run_section(scenario, quick, log.info)
-            except (GpmeError, ValueError) as exc:   # a run that cannot be made is a failed row
+            except (GpmeError, ValueError, RuntimeError, exu.ExudynError) as exc:
+                # a run that cannot be made (or a model Exudyn refuses) is a failed row
                 rows.append(_failed(scenario, "runs", exc))
         timings.append((scenario.name, time.perf_counter() - t0))
         if bar:

@@ -345,6 +345,9 @@ def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: float 
                 f"steps, above the budget of {MAX_GPME_STEPS:,}")
         log(f"exudyn {scenario.name}: {text}")
         return [_info(scenario, f"{EXACT}: not run", f"{t_end:g} s", text)]
+    # refuse an inconsistent start before gpme's runs are paid for
+    ProgrammedConstraints(scenario.constraints, scenario.model).check_start(
+        0.0, scenario.q0, scenario.q_dot0, scenario.name)
     start = time.perf_counter()
     if refined is None:
         refined = run_gates.refined_gpme_runs(scenario.system, scenario.q0, scenario.q_dot0,
