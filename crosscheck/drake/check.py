@@ -87,20 +87,20 @@ TOLERANCES = {
                                "vs the <dynamics damping> Drake's parser read, applied as its "
                                "joint damping): exact up to a few roundings" + _SPLIT +
                                " (N, N m)"),
-    "inverse dynamics tau": Tolerance(1e-12, 1e-11, "residual check, round-off only: gpme's "
-                                      "q_ddot comes from a backward-stable solve, so M q_ddot "
-                                      "- (h + Q) is ~eps |M| |q_ddot| whatever cond(M), and "
-                                      "Drake's Newton-Euler recursion forms M a + C v - tau_g - "
-                                      "force elements in ~n steps; relative to the largest term "
-                                      "of that balance (the row's scale), 1e-11 as for the bias "
-                                      "term, whose cancellation it contains (N, N m)"),
     "frame position": PIN_TOLERANCES["frame position"],
     "frame velocity": PIN_TOLERANCES["frame velocity"],
     "frame jacobian": PIN_TOLERANCES["frame jacobian"],
     "frame drift": PIN_TOLERANCES["frame drift"],
 }
-# quantities from a linear solve with M: tolerance set per state by solve_tolerances
-SOLVED = ("free q_ddot",)
+# quantities whose tolerance is set per state: free q_ddot by solve_tolerances (cond(M)),
+# the inverse dynamics residual by :func:`residual_tolerance` (n)
+SOLVED = ("free q_ddot", "inverse dynamics tau")
+EPS = float(np.finfo(float).eps)
+# Cholesky's backward error: gpme's q_ddot solves (M + dM) q_ddot = h + Q with ||dM|| <= c n
+# eps ||M|| (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., Thm 10.3-10.4),
+# so the residual M q_ddot - (h + Q) is ~n eps ||M|| ||q_ddot||, whatever cond(M); Drake's
+# Newton-Euler pass adds round-off of the same order.  x2 two evaluations, x2 for c.
+RESIDUAL_FACTOR = 4.0
 QUANTITIES = tuple(TOLERANCES) + SOLVED
 
 
@@ -257,26 +257,40 @@ def compare_state(case: DrakeCase, state) -> list:
                        **case.overrides})
     add("free q_ddot", sol.q_ddot, d["q_ddot"], coords)
     tau, scale = inverse_dynamics(ds, ctx, q, qd, sol.q_ddot, d)
+    tolerances.update({"inverse dynamics tau": residual_tolerance(len(q)), **case.overrides})
     add("inverse dynamics tau", terms.t, tau, coords, scale)
     return rows
+
+
+def residual_tolerance(n: int) -> Tolerance:
+    """Tolerance of the inverse dynamics residual for n coordinates: rel = 4 n eps of the
+    row's scale (||M||_inf ||q_ddot||_inf or the largest force term), abs 1e-12 N."""
+    rel = RESIDUAL_FACTOR * n * EPS
+    return Tolerance(1e-12, rel, (
+        "residual check, round-off only: gpme's q_ddot comes from a backward-stable Cholesky "
+        "solve, (M + dM) q_ddot = h + Q with ||dM|| ~ n eps ||M||, so M q_ddot - (h + Q) is "
+        "~n eps ||M|| ||q_ddot|| whatever cond(M); Drake's Newton-Euler pass forming M a + C v "
+        "- tau_g - force elements adds round-off of that order; rel = 4 n eps (x2 two "
+        f"evaluations, x2 for the constant) = {rel:.1e} of scale = max(||M||_inf "
+        "||q_ddot||_inf, |C v|, |tau_g|, |springs|, |dampers|) (N, N m)"))
 
 
 def inverse_dynamics(ds: DrakeSystem, context, q, q_dot, q_ddot, terms: dict) -> tuple:
     """(tau (n,) N or N m, scale N or N m): the applied generalized forces Drake's
     ``CalcInverseDynamics`` needs for the accelerations q_ddot (n,) (gpme's) at (q, q_dot),
     with the force elements (gravity, springs, joint damping) as external forces: tau = M
-    q_ddot + C v - tau_g - springs - dampers, which must be the drives t.  scale: the largest
-    term of that balance (|M q_ddot| from Drake's M in ``terms``, |C v|, |tau_g|, |springs|,
-    |dampers|), the size its round-off is relative to."""
+    q_ddot + C v - tau_g - springs - dampers, which must be the drives t.  scale: the size its
+    round-off is relative to, max(||M||_inf ||q_ddot||_inf (Drake's M in ``terms``), |C v|,
+    |tau_g|, |springs|, |dampers|)."""
     plant = ds.plant
     plant.SetPositions(context, ds.q_drake(q))
     plant.SetVelocities(context, ds.to_drake(q_dot))
     forces = MultibodyForces(plant)
     plant.CalcForceElementsContribution(context, forces)
     tau = ds.to_gpme(plant.CalcInverseDynamics(context, ds.to_drake(q_ddot), forces))
-    parts = [terms["M"] @ np.asarray(q_ddot, float), terms["bias"], terms["tau_g"],
-             terms["springs"], terms["dampers"]]
-    return tau, float(max(np.abs(p).max(initial=0.0) for p in parts))
+    m_a = np.linalg.norm(terms["M"], np.inf) * float(np.abs(q_ddot).max(initial=0.0))
+    parts = [terms["bias"], terms["tau_g"], terms["springs"], terms["dampers"]]
+    return tau, float(max([m_a] + [np.abs(p).max(initial=0.0) for p in parts]))
 
 
 def compare_case(case: DrakeCase, states: Sequence) -> pd.DataFrame:
