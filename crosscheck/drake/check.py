@@ -2,8 +2,8 @@
 Drake's own integrator, for any Scenario (docs/crosscheck-drake.md).
 
 For each scenario (gpme_io.scenario.Scenario) the gpme model is written by
-gpme_io.urdf.write_urdf to out_dir/urdf/<name>.urdf and read by Drake's own parser into a
-continuous MultibodyPlant (crosscheck.drake.model.from_urdf: springs as force elements and
+gpme_io.urdf.write_urdf to out_dir/urdf/drake/<name>.urdf and read by Drake's own parser
+into a continuous MultibodyPlant (crosscheck.drake.model.from_urdf: springs as force elements and
 gravity from the side file, dampers as Drake's joint damping from <dynamics damping>).  At
 each state (crosscheck.pinocchio.check.scenario_states: seeded random states within the
 joint limits and states along a short run, the Pinocchio check's plan) every term of
@@ -65,6 +65,7 @@ from .model import DrakeSystem, drake_version, for_model
 
 ENGINE = "drake"
 SECTIONS = ("terms", "runs")
+URDF_SUBDIR = "urdf/drake"     # under out_dir: the URDFs (and side files) Drake reads
 log = logging.getLogger("gpme.crosscheck.drake")
 
 _SPLIT = ("; Drake gives the force elements' sum (gravity, springs, joint damping), so the "
@@ -335,7 +336,7 @@ def _failed_row(scenario, section, what, exc):
 
 def terms_section(scenario, out_dir: Path, plan) -> tuple:
     """(rows DataFrame, CaseRecord) of the terms of ``scenario``."""
-    case = make_case(scenario, out_dir / "urdf")
+    case = make_case(scenario, out_dir / URDF_SUBDIR)
     states = scenario_states(scenario, plan)
     df = compare_case(case, states).assign(section="terms")
     log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
@@ -378,7 +379,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
         if "runs" in sections:
             from .runs import run_section
             try:
-                rows = run_section(scenario, quick, log.info, urdf_dir=out_dir / "urdf")
+                rows = run_section(scenario, quick, log.info, urdf_dir=out_dir / URDF_SUBDIR)
             except GpmeError as exc:
                 rows = [_failed_row(scenario, "runs", "free run", exc)]
             frames.append(pd.DataFrame(rows).assign(section="runs"))
