@@ -52,7 +52,7 @@ import numpy as np
 import pandas as pd
 from pydrake.multibody.tree import JacobianWrtVariable, MultibodyForces
 
-from gpme_core.errors import GpmeError
+from gpme_core.errors import GpmeError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 
@@ -338,7 +338,11 @@ def terms_section(scenario, out_dir: Path, plan) -> tuple:
     """(rows DataFrame, CaseRecord) of the terms of ``scenario``."""
     case = make_case(scenario, out_dir / URDF_SUBDIR)
     states = scenario_states(scenario, plan)
-    df = compare_case(case, states).assign(section="terms")
+    try:
+        df = compare_case(case, states).assign(section="terms")
+    except RuntimeError as exc:     # Drake refuses to evaluate the model (e.g. a link whose
+        raise SimulationError(      # articulated inertia is singular): a failed row
+            f"Drake cannot evaluate {scenario.name}: {exc}") from None
     log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
              int((df["status"] == "fail").sum()))
     return df, CaseRecord(case.label, scenario.model.n_coordinates, len(states),
