@@ -45,7 +45,9 @@ FILE_NOTES = {
     "plots": "spread of each check group's error / tolerance",
     "pinocchio.html": "the Pinocchio crosscheck's own page",
     "mujoco.html": "the MuJoCo crosscheck's own page",
-    "urdf": "the URDFs written for Pinocchio",
+    "drake.html": "the Drake crosscheck's own page",
+    "exudyn.html": "the Exudyn crosscheck's own page",
+    "urdf": "the URDFs written for Pinocchio (drake/: those Drake read)",
     "paper": "the paper's runs: histories and figures",
     "runs": "each model's run: histories and figures",
 }
