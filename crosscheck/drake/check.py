@@ -408,40 +408,18 @@ CONVENTIONS = (
     "are normwise: abs = max|x - y|, rel = abs / scale (max|y|; springs and dampers: the "
     "largest force element part); pass when abs ≤ tol_abs + tol_rel scale; info rows have "
     "no finite tolerance and are never counted as passes.")
-WORST_ROWS = 40
 
 
 def _html(df, records, wall, quick):
-    """drake.html (crosscheck/reports/templates/engine.html.j2)."""
-    from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
+    """drake.html (crosscheck.reports.html.comparison_page)."""
+    from ..reports.html import comparison_page, section, table
     version = drake_version()
-    if df.empty:
-        return engine_page("gpme vs Drake", f"gpme vs Drake {version}: nothing compared",
-                           False, [], [])
-    summary = report.summarise(df, keys=("section", "model", "quantity"))
-    worst = report.worst_first(df).head(WORST_ROWS)
-    reasons, reason_table = reason_refs(worst, summary)
-    n_fail = int((summary["status"] == "fail").sum())
-    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
     cases = pd.DataFrame([{"model": r.label, "n": r.n, "states": r.n_states,
                            "Drake side": "; ".join(r.notes)} for r in records])
     intro = [f"{len(df)} comparisons over {len(records)} models; "
              f"{'quick' if quick else 'full'} run, {wall:.1f} s. Drake {version}, "
              "MultibodyPlant(time_step=0) from the URDF gpme wrote."]
-    sections = [
-        section("Models", table=table(cases, status_column="-",
-                                      left_columns=("model", "Drake side"))
-                if not cases.empty else None),
-        section("Conventions", [CONVENTIONS]),
-        section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
-            "Every row: the checks/drake/ files of this report (one gzip CSV per check), "
-            "or all at once with python -m crosscheck.reports.rows <report dir> drake."],
-            table=table(cite_reasons(worst, reasons), left_columns=(
-                "section", "model", "quantity", "case", "entry"))),
-        section("Summary per model and quantity", table=table(
-            cite_reasons(summary, reasons), left_columns=("section", "model", "quantity",
-                                                          "worst_case", "worst_entry"))),
-        section("Why each tolerance is what it is (the reason column's ids)",
-                table=reason_table)]
-    return engine_page("gpme vs Drake", f"gpme vs Drake {version}: {status}", n_fail == 0,
-                       intro, sections)
+    models = section("Models", table=table(cases, status_column="-",
+                                           left_columns=("model", "Drake side"))
+                     if not cases.empty else None)
+    return comparison_page(ENGINE, "gpme vs Drake", version, df, intro, [models], CONVENTIONS)

@@ -170,36 +170,15 @@ CONVENTIONS = (
     "measured by halving its own step (gpme classical RK4, order 4; Exudyn generalized-alpha, "
     "order 2), taken at the lowest accepted order p - 1, plus round-off and Exudyn's Newton "
     "floor; an observed-order row per engine checks the asymptotic regime.")
-WORST_ROWS = 40
 
 
 def _html(df, timings, wall, quick):
-    """exudyn.html (crosscheck/reports/templates/engine.html.j2)."""
-    from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
-    title = "gpme vs Exudyn"
-    if df.empty:
-        return engine_page(title, f"gpme vs Exudyn {exu.__version__}: nothing compared", False,
-                           [], [])
-    summary = report.summarise(df, keys=("section", "model", "quantity"))
-    worst = report.worst_first(df).head(WORST_ROWS)
-    reasons, reason_table = reason_refs(worst, summary)
-    n_fail = int((summary["status"] == "fail").sum())
-    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
+    """exudyn.html (crosscheck.reports.html.comparison_page)."""
+    from ..reports.html import comparison_page, section, table
     times = pd.DataFrame([{"scenario": n, "wall time (s)": round(w, 1)} for n, w in timings])
     intro = [f"{len(df)} comparisons over {len(timings)} scenarios; "
              f"{'quick' if quick else 'full'} run, {wall:.1f} s."]
-    sections = [
-        section("Scenarios", table=table(times, status_column="-", left_columns=("scenario",))),
-        section("Conventions", [CONVENTIONS]),
-        section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
-            "Every row: the checks/exudyn/ files of this report, or all at once with python "
-            "-m crosscheck.reports.rows <report dir> exudyn."],
-            table=table(cite_reasons(worst, reasons), left_columns=(
-                "section", "model", "quantity", "case", "entry"))),
-        section("Summary per model and quantity", table=table(
-            cite_reasons(summary, reasons), left_columns=("section", "model", "quantity",
-                                                          "worst_case", "worst_entry"))),
-        section("Why each tolerance is what it is (the reason column's ids)",
-                table=reason_table)]
-    return engine_page(title, f"gpme vs Exudyn {exu.__version__}: {status}", n_fail == 0,
-                       intro, sections)
+    scenarios = section("Scenarios", table=table(times, status_column="-",
+                                                 left_columns=("scenario",)))
+    return comparison_page(ENGINE, "gpme vs Exudyn", exu.__version__, df, intro, [scenarios],
+                           CONVENTIONS)

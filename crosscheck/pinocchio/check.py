@@ -584,20 +584,11 @@ CONVENTIONS = (
     "states. Errors are normwise: abs = max|x - y|, rel = abs / max|y|; pass when abs ≤ "
     "tol_abs + tol_rel max|y|; info rows have no finite tolerance and are never counted as "
     "passes.")
-WORST_ROWS = 40
 
 
 def _html(df, records, skipped, wall, quick):
-    """pinocchio.html (crosscheck/reports/templates/engine.html.j2)."""
-    from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
-    if df.empty:
-        return engine_page("gpme vs Pinocchio", "gpme vs Pinocchio: nothing compared", False,
-                           [], [])
-    summary = report.summarise(df, keys=("section", "model", "quantity"))
-    worst = report.worst_first(df).head(WORST_ROWS)
-    reasons, reason_table = reason_refs(worst, summary)
-    n_fail = int((summary["status"] == "fail").sum())
-    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
+    """pinocchio.html (crosscheck.reports.html.comparison_page)."""
+    from ..reports.html import comparison_page, section, table
     crba = ("pin.crba returned the whole symmetric matrix" if all(r.crba_whole for r in records)
             else "pin.crba filled only the upper triangle for some models; it was mirrored "
                  "before comparing")
@@ -606,19 +597,7 @@ def _html(df, records, skipped, wall, quick):
                            "Pinocchio side": "; ".join(r.notes)} for r in records])
     intro = [f"{len(df)} comparisons over {len(records)} model cases; "
              f"{'quick' if quick else 'full'} run, {wall:.1f} s. {crba}."]
-    sections = [
-        section("Model cases", items=skipped, table=table(
-            cases, status_column="-", left_columns=("model case", "kind", "Pinocchio side"))),
-        section("Conventions", [CONVENTIONS]),
-        section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
-            "Every row: the checks/pinocchio/ files of this report (one gzip CSV per check), "
-            "or all at once with python -m crosscheck.reports.rows <report dir> pinocchio."],
-            table=table(cite_reasons(worst, reasons), left_columns=(
-                "section", "model", "quantity", "case", "entry"))),
-        section("Summary per model and quantity", table=table(
-            cite_reasons(summary, reasons), left_columns=("section", "model", "quantity",
-                                                          "worst_case", "worst_entry"))),
-        section("Why each tolerance is what it is (the reason column's ids)",
-                table=reason_table)]
-    return engine_page("gpme vs Pinocchio", f"gpme vs Pinocchio {pin.__version__}: {status}",
-                       n_fail == 0, intro, sections)
+    model_cases = section("Model cases", items=skipped, table=table(
+        cases, status_column="-", left_columns=("model case", "kind", "Pinocchio side")))
+    return comparison_page(ENGINE, "gpme vs Pinocchio", pin.__version__, df, intro,
+                           [model_cases], CONVENTIONS)

@@ -121,3 +121,35 @@ def cite_reasons(df, ids):
     if "reason" not in df.columns:
         return df
     return df.assign(reason=df["reason"].map(ids).fillna("-"))
+
+
+WORST_ROWS = 40      # rows of an engine page's worst-cases table
+
+
+def comparison_page(engine, title, version, df, intro, lead_sections, conventions):
+    """The HTML of an engine's comparison page (pinocchio.html, drake.html, exudyn.html):
+    verdict, ``intro`` paragraphs, the engine's own ``lead_sections`` (model cases, ...),
+    its ``conventions`` text, the WORST_ROWS worst rows, the summary per model and quantity
+    and the numbered tolerance reasons.  df: the engine's comparison rows (columns of
+    crosscheck.compare.COLUMNS plus ``section``); engine: its checks/ directory name."""
+    from . import tables as report
+    if df.empty:
+        return engine_page(title, f"{title} {version}: nothing compared", False, [], [])
+    summary = report.summarise(df, keys=("section", "model", "quantity"))
+    worst = report.worst_first(df).head(WORST_ROWS)
+    reasons, reason_table = reason_refs(worst, summary)
+    n_fail = int((summary["status"] == "fail").sum())
+    status = "all comparisons pass" if n_fail == 0 else f"{n_fail} checks FAIL"
+    sections = list(lead_sections) + [
+        section("Conventions", [conventions]),
+        section(f"Worst cases ({min(WORST_ROWS, len(df))} of {len(df)} rows)", [
+            f"Every row: the checks/{engine}/ files of this report (one gzip CSV per check), "
+            f"or all at once with python -m crosscheck.reports.rows <report dir> {engine}."],
+            table=table(cite_reasons(worst, reasons), left_columns=(
+                "section", "model", "quantity", "case", "entry"))),
+        section("Summary per model and quantity", table=table(
+            cite_reasons(summary, reasons), left_columns=("section", "model", "quantity",
+                                                          "worst_case", "worst_entry"))),
+        section("Why each tolerance is what it is (the reason column's ids)",
+                table=reason_table)]
+    return engine_page(title, f"{title} {version}: {status}", n_fail == 0, intro, sections)
