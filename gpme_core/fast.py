@@ -20,11 +20,14 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the refere
     ENABLED = False
 
 if ENABLED:
-    _jit = numba.njit(cache=True, fastmath=False)
+    # numba.njit with a disk cache that a change in any gpme_core source the kernels are
+    # built from invalidates, not only one in their own file (gpme_core.jit_cache)
+    from .jit_cache import kernel_jit
+    _jit = kernel_jit(fastmath=False)
     # generated code of the user's expressions (gpme_core.compiled): a division by zero
     # gives inf or nan as in numpy, for the caller's finiteness check to report, instead
     # of raising ZeroDivisionError out of the compiled loop
-    _jit_user = numba.njit(cache=True, fastmath=False, error_model="numpy")
+    _jit_user = kernel_jit(fastmath=False, error_model="numpy")
 else:  # pragma: no cover
     def _jit(f):
         return f
