@@ -131,6 +131,23 @@ def compare(engine: str, model: str, quantity: str, case: str, gpme_value, engin
             "tol_rel": tol.rel, "status": st, "passed": st != FAIL, "reason": tol.reason}
 
 
+NOT_JUDGED = "not judged, because "
+
+
+def not_judged(row: dict, because: str) -> dict:
+    """``row`` (a :func:`compare` dict) turned into information: its comparison cannot be
+    judged because a prerequisite failed (``because`` says which check, and that check
+    fails in its own engine, once).  The numbers stay for reading; the gate it would have
+    had is kept in the reason.  A row with a NaN or an infinity stays a failure."""
+    if not math.isfinite(row["abs_error"]):
+        return row
+    gate = f"{row['tol_abs']:.3g}" + (f" + {row['tol_rel']:.3g} x scale" if row["tol_rel"]
+                                       else "")
+    return {**row, "status": INFO, "passed": True, "tol_abs": float("inf"), "tol_rel": 0.0,
+            "reason": f"information: {NOT_JUDGED}{because} (gate otherwise: {gate}; "
+                      f"{row['reason']})"}
+
+
 def row_status(df) -> "np.ndarray":
     """(len(df),) status of each row of a comparison table: its ``status`` column, but
     "fail" wherever ``passed`` is False (a caller that overrode ``passed``, or a table

@@ -41,7 +41,7 @@ from .compare import CRASH_QUANTITY, Tolerance, compare
 from .engines import missing_message
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
-from .reports.rows import check_name, normalise, write_rows
+from .reports.rows import check_name, normalise, other_rows, own_rows, write_rows
 from .reports.tables import atomic_write_text, summarise, write_csv
 from .verify_meta import environment
 
@@ -114,6 +114,24 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     df = rows_frame(rows)
     write_rows(df, run_dir, "gpme")
     return df
+
+
+def _merge_prerequisites(staging, tables, prerequisites):
+    """Add the rows other steps made about another engine's own runs (gpme's observed order
+    in the Pinocchio, MuJoCo, Drake and Exudyn steps) to that engine's table, once per
+    (model, quantity, case), and rewrite its rows in the report."""
+    extra = [df for df in prerequisites if len(df)]
+    if not extra:
+        return
+    merged = pd.concat(extra, ignore_index=True)
+    for engine, rows in merged.groupby("engine", sort=False):
+        base = tables.get(engine)
+        table = rows if base is None or not len(base) else pd.concat([base, rows],
+                                                                      ignore_index=True)
+        table = table.drop_duplicates(subset=["engine", "model", "quantity", "case"],
+                                      keep="first", ignore_index=True)
+        tables[engine] = table
+        write_rows(normalise(table), staging, engine)
 
 
 def _engine_step(name, run_dir, scenarios, quick, progress):
@@ -312,7 +330,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                previous=(None, "", None)):
     from .run_checks import run_warnings
     start = time.perf_counter()
-    tables, timings = {}, {}
+    tables, timings, prerequisites = {}, {}, []
     record = _models_record(scenarios if scenarios is not None else
                             default_scenarios("pinocchio", quick))
     atomic_write_text(staging / "models.json", json.dumps(record, indent=1))
@@ -334,7 +352,10 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                 write_rows(normalise(tables[step]), staging, step)
             else:
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
-                tables[step] = _engine_step(step, staging, chosen, quick, progress)
+                table = _engine_step(step, staging, chosen, quick, progress)
+                # checks of gpme's own runs made on the way (its observed order) are gpme's
+                prerequisites.append(other_rows(table, step))
+                tables[step] = own_rows(table, step)
         except Exception as exc:  # a crashed step is a failed check, reported in full
             tables[step] = _crash_row(step, exc)
             write_rows(normalise(tables[step]), staging, step)   # its row, linked by the index
@@ -343,6 +364,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         failed = int(_failed(tables[step]).sum())
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
+    _merge_prerequisites(staging, tables, prerequisites)
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
     # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
     rows = normalise(pd.concat(tables.values(), ignore_index=True))

@@ -198,6 +198,9 @@ def _crosscheck(args):
             df = check.run(out, scenarios, quick=args.quick, progress=not args.no_progress)
     except GpmeError as exc:
         return _error(exc)
+    from crosscheck.reports.rows import normalise, other_rows, write_rows
+    for engine, rows in other_rows(df, args.engine).groupby("engine"):
+        write_rows(normalise(rows), out, engine)      # e.g. gpme's observed order: gpme's
     failed = df[df["status"] == "fail"] if "status" in df else df[~df["passed"].astype(bool)]
     print(f"{len(df)} comparisons, {len(failed)} failed; report in {out}")
     if len(failed):

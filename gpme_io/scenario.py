@@ -41,6 +41,24 @@ class ToleranceOverride:
 
 
 @dataclass(frozen=True)
+class EngineStep:
+    """The first (coarsest) step a model file sets for an engine with its own integrator,
+    with its reason; the harness still halves it as long as the engine's runs are not in
+    their asymptotic regime (crosscheck.convergence), at most ``max_halvings`` times.
+
+    engine : "drake" or "exudyn" (Pinocchio's and MuJoCo's runs use gpme's RK4 step)
+    dt     : s, > 0
+    reason : why this step (shown in the report's case text and in every row's case)
+    max_halvings : halvings allowed beyond the first three runs (None: the harness's)
+    """
+
+    engine: str
+    dt: float
+    reason: str
+    max_halvings: Optional[int] = None
+
+
+@dataclass(frozen=True)
 class Scenario:
     """One model and task, ready to run and to compare.
 
@@ -61,6 +79,7 @@ class Scenario:
     notes       : what the reader accepted but left out of M, h, g (friction, limits, ...)
                   and what it replaced (a link's inertial by its RFEM beam), one line each
     tolerances  : {check: ToleranceOverride}
+    engine_steps: {engine: EngineStep}, the model file's first steps of drake and exudyn
     on_constraints: whether q0, q_dot0 were placed on the constraints
     yield_strengths: {flexible link name: Pa}, the links whose elasticity can be judged
                   (gpme_core.elastic_loads)
@@ -85,6 +104,7 @@ class Scenario:
     tolerances: Mapping[str, ToleranceOverride] = field(default_factory=dict)
     on_constraints: bool = False
     yield_strengths: Mapping[str, float] = field(default_factory=dict)
+    engine_steps: Mapping[str, EngineStep] = field(default_factory=dict)
 
     def __post_init__(self):
         for name in ("q0", "q_dot0"):
@@ -93,6 +113,7 @@ class Scenario:
             object.__setattr__(self, name, a)
         object.__setattr__(self, "frozen", MappingProxyType(dict(self.frozen)))
         object.__setattr__(self, "tolerances", MappingProxyType(dict(self.tolerances)))
+        object.__setattr__(self, "engine_steps", MappingProxyType(dict(self.engine_steps)))
         object.__setattr__(self, "yield_strengths",
                            MappingProxyType(dict(self.yield_strengths)))
         object.__setattr__(self, "constraints", tuple(self.constraints))

@@ -100,6 +100,10 @@ def test_a_coordinate_left_at_zero_is_gated_by_the_round_off_of_the_whole_state(
     rows = run_rows("drake", scenario, gpme, other, ["torsion"], "free run", "case")
     assert rows[0]["status"] == "pass"
     assert 1e-16 < rows[0]["tol_abs"] < 1e-13
-    # without the model's coordinates the floor is the column's own round-off only: fails
+    # without the model's coordinates the floor is the column's own round-off only: the
+    # round-off noise then counts as resolved truncation error that does not converge, so
+    # an order row fails (the estimate is not the error) and the column is not judged
     plain = SimpleNamespace(name="synthetic", model=None, tolerance=lambda e, q: None)
-    assert run_rows("drake", plain, gpme, other, ["torsion"], "free run", "case")[0]["status"] == "fail"
+    rows = run_rows("drake", plain, gpme, other, ["torsion"], "free run", "case")
+    assert rows[0]["status"] == "info" and "not judged" in rows[0]["reason"]
+    assert any(r["status"] == "fail" for r in rows[1:])

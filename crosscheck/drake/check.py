@@ -60,7 +60,7 @@ from ..compare import Tolerance, compare, tolerance_for
 from ..pinocchio.check import FULL, QUICK, TOLERANCES as PIN_TOLERANCES, scenario_states, \
     solve_tolerances
 from ..reports import tables as report
-from ..reports.rows import write_rows
+from ..reports.rows import own_rows, write_rows
 from .model import DrakeSystem, drake_version, for_model
 
 ENGINE = "drake"
@@ -394,7 +394,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_rows(df, out_dir, ENGINE)
+    write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
     report.atomic_write_text(out_dir / "drake.html", _html(df, records, wall, quick))
     return df
 

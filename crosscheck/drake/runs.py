@@ -33,7 +33,9 @@ from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from gpme_core.errors import ConstraintError, SimulationError
 
 from .. import halving_gates, run_gates
+from ..engine_steps import engine_first_step
 from ..compare import Tolerance, compare
+from ..convergence import FINEST, RefinementBudget, refine
 from ..mujoco.cases import free_variant
 from ..pinocchio.runs import run_step, run_t_end
 from .model import DrakeSystem, for_model
@@ -45,6 +47,9 @@ SCHEME = "runge_kutta5"     # pydrake.systems.analysis.GetIntegrationSchemes()
 SCHEME_TEXT = "Runge-Kutta 5 (Dormand-Prince), fixed step"
 SCHEME_ORDER = 5.0
 MIN_FREE_T_END = 0.05       # s, shortest free run compared (5 output samples)
+# Drake's step halvings beyond its first three runs, to reach the asymptotic regime at every
+# compared time (crosscheck.convergence); a run projected above 120 s is not started
+REFINEMENT = RefinementBudget(max_halvings=3, max_run_wall_s=120.0)
 
 
 class _Drives(LeafSystem):
@@ -120,11 +125,25 @@ def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir
 
 
 def halved_drake_runs(scenario, t_end: float, dt: float, output_dt: float,
-                      urdf_dir) -> halving_gates.HalvedRuns:
-    """Drake's runs at dt, dt/2, dt/4 (s) as crosscheck.halving_gates.HalvedRuns."""
-    runs = tuple(drake_free_run(scenario, t_end, dt / k, output_dt, urdf_dir)
-                 for k in (1, 2, 4))
-    return halving_gates.HalvedRuns(ENGINE, SCHEME_TEXT, SCHEME_ORDER, runs, dt)
+                      urdf_dir, log=None, budget: RefinementBudget = REFINEMENT
+                      ) -> halving_gates.HalvedRuns:
+    """Drake's runs at dt, dt/2, dt/4 (s) as crosscheck.halving_gates.HalvedRuns, dt halved
+    (crosscheck.convergence.refine, within REFINEMENT budget) until Drake's runs are in
+    their asymptotic regime at every compared time; ``.refinement`` records how."""
+    model = scenario.model
+    columns = state_columns(model)
+
+    def run_at(h):
+        return drake_free_run(scenario, t_end, h, output_dt, urdf_dir)
+
+    def floors_of(runs):
+        trial = halving_gates.HalvedRuns(ENGINE, SCHEME_TEXT, SCHEME_ORDER, runs, dt)
+        return {c: trial.floor(c, model) for c in columns}
+
+    runs, h, _, record = refine(run_at, dt, columns, floors_of, SCHEME_ORDER, FINEST,
+                                budget, log)
+    return halving_gates.HalvedRuns(ENGINE, SCHEME_TEXT, SCHEME_ORDER, runs, h,
+                                    refinement=record)
 
 
 def state_columns(model) -> list:
@@ -142,7 +161,7 @@ def _gpme_free_runs(free, t_end: float, dt: float) -> tuple:
     while True:
         try:
             refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_run,
-                                                  dt, OUTPUT_DT)
+                                                  dt, OUTPUT_DT, compared=FINEST)
         except (SimulationError, ConstraintError) as exc:   # diverged, or left a joint range
             shorter = round(t_run / 2.0 / OUTPUT_DT) * OUTPUT_DT
             if shorter < MIN_FREE_T_END:
@@ -175,10 +194,14 @@ def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
         log(f"{FREE} {free.name}: {why}")
         return [compare(ENGINE, free.name, f"{FREE}: not run", f"{t_end:g} s, dt = {dt:.3g} s",
                         [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {why}"), ["-"])]
+    first, note, budget = engine_first_step(scenario, ENGINE, refined.dt, REFINEMENT)
     with tempfile.TemporaryDirectory() as tmp:
-        drake = halved_drake_runs(free, t_run, refined.dt, OUTPUT_DT, urdf_dir or tmp)
-    case = (f"{FREE}, drive on, {t_run:g} s{why}; gpme RK4 and Drake {SCHEME} at dt = "
-            f"{refined.dt:g}, dt/2, dt/4 s (compared: dt/4)")
+        drake = halved_drake_runs(free, t_run, first, OUTPUT_DT, urdf_dir or tmp,
+                                  log=lambda m: log(f"{FREE} {free.name}: drake {m}"),
+                                  budget=budget)
+    case = (f"{FREE}, drive on, {t_run:g} s{why}; gpme RK4 at dt = {refined.dt:g}, dt/2, "
+            f"dt/4 s, Drake {SCHEME} at dt = {drake.dt:g}, dt/2, dt/4 s{note} (compared: the "
+            "finest of each)")
     rows = halving_gates.run_rows(ENGINE, free, halving_gates.from_refined(refined), drake,
                                   state_columns(free.model), FREE, case)
     gpme_s = sum(r.attrs.get("wall_time_s", 0.0) for r in refined.runs)

@@ -33,7 +33,7 @@ from gpme_core.errors import GpmeError
 
 from ..compare import Tolerance, compare
 from ..reports import tables as report
-from ..reports.rows import write_rows
+from ..reports.rows import own_rows, write_rows
 from ..sampling import state_ranges
 from ..pinocchio.model import from_gpme
 from . import runs as exu_runs
@@ -146,7 +146,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     df = pd.DataFrame(rows)
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_rows(df, out_dir, ENGINE)
+    write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
     report.atomic_write_text(out_dir / "exudyn.html", _html(df, timings, wall, quick))
     return df
 

@@ -36,9 +36,13 @@ import pandas as pd
 
 from gpme_core.errors import ConstraintError, SimulationError
 
+from ..convergence import FINEST, RefinementBudget, refine
+from ..engine_steps import engine_first_step
+from ..run_gates import phi_term_scale
 from .constraints import ProgrammedConstraints
 from .model import add_tree, mass_and_forces, quiet_settings
 
+EPS = float(np.finfo(float).eps)
 ENGINE = "exudyn"
 SCHEME = "generalized-alpha, index 3"
 ORDER = 2.0                      # global order of generalized-alpha in q, q_dot and lambda
@@ -128,7 +132,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float = OUTPUT_
         the data of Pinocchio's kinematics), constraint specs, or only Pinocchio's model
         (tests perturb one side); q0, q_dot0 (n,): the start (default the scenario's).
     Returns the columns of :func:`columns`, lambda with gpme's sign; attrs: engine, dt,
-    steps, wall_time_s, phi_scale {name: max_t sum_j |A_kj q_j|, the size of the terms Phi
+    steps, wall_time_s, phi_scale {name: max_t sum_j |A_kj| (|q_j| + 1), crosscheck.run_gates.phi_term_scale, the size of the terms Phi
     is formed from}, newton_iterations, start_violation (max|Phi|, max|Phi_dot|),
     solver (SolverSettings.describe()).
     Raises ConstraintError (start off the constraints) or SimulationError naming Exudyn's
@@ -197,7 +201,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float = OUTPUT_
     for k in range(n_out + 1):
         t, q, v, lam = records[k]
         phi, phi_dot, a = pc.evaluate(t, q, v)
-        phi_scale = np.maximum(phi_scale, np.abs(a) @ np.abs(q))
+        phi_scale = np.maximum(phi_scale, phi_term_scale(a, q))
         rows.append([t, *q, *v, *phi, *phi_dot, *lam])
     df = pd.DataFrame(rows, columns=columns(model, pc.names))
     df.attrs.update(engine=ENGINE, dt=dt, steps=steps, wall_time_s=wall,
@@ -211,80 +215,84 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float = OUTPUT_
 # --------------------------------------------------------------------------- halving and rows
 EXACT = "exact programmed run"
 EXUDYN_DT = 1e-3          # s, Exudyn's first coarsest step h (then h/2, h/4)
-MAX_HALVINGS = 2          # h is halved at most this often to reach the asymptotic regime
+# halvings beyond the first three runs to reach the asymptotic regime at every compared
+# time (crosscheck.convergence); a run projected above 120 s is not started
+REFINEMENT = RefinementBudget(max_halvings=4, max_run_wall_s=120.0)
 
 
-def _phi_floors(df, constraint_names, n_steps) -> dict:
+def _phi_floors(df, constraint_names) -> dict:
     """{Phi column: round-off floor}: Phi is formed from terms of size phi_scale (attrs,
-    max_t sum_j |A_kj q_j|), not from |Phi| ~ 0, so its round-off is that of the terms,
-    2 eps N phi_scale (crosscheck.run_gates.roundoff_floor, linear accumulation)."""
-    from ..run_gates import roundoff_floor
+    max_t sum_j |A_kj| (|q_j| + 1), crosscheck.run_gates.phi_term_scale), not from |Phi| ~ 0, so one evaluation rounds at PHI_EVAL_ROUNDINGS
+    eps phi_scale.  It does not accumulate over the steps: the index-3 solver sets Phi = 0
+    at every step (to Newton's tolerance, in the solver floor), and gpme's Baumgarte term
+    pulls Phi back within 1/alpha (crosscheck.run_gates.phi_floor), so an older rounding
+    is not carried."""
+    from ..run_gates import PHI_EVAL_ROUNDINGS
     scale = df.attrs.get("phi_scale", {})
-    return {c: roundoff_floor(float(scale.get(c, 0.0)), n_steps) for c in constraint_names}
+    return {c: PHI_EVAL_ROUNDINGS * EPS * float(scale.get(c, 0.0)) for c in constraint_names}
 
 
-def gpme_floors(scenario, columns_compared, exudyn_finest, n_steps) -> dict:
-    """{Phi column: round-off floor of gpme's finest run (n_steps)} beyond halving_gates'
-    floor, which takes the column's own |x|max as the scale: Phi is ~0 on the manifold but
-    formed from terms of size phi_scale (:func:`_phi_floors`, the scale from Exudyn's run:
-    the same positions up to the compared errors)."""
+def gpme_floors(scenario, columns_compared, exudyn_finest, n_steps, h) -> dict:
+    """{Phi column: round-off floor of gpme's finest run (n_steps of h s)} beyond
+    halving_gates' floor, which takes the column's own |x|max as the scale: Phi is ~0 on
+    the manifold but formed from terms of size phi_scale (the scale from Exudyn's run: the
+    same positions up to the compared errors), with the roundings Baumgarte has not yet
+    pulled back (crosscheck.run_gates.phi_floor, one engine's half)."""
+    from ..run_gates import phi_floor
+    scale = exudyn_finest.attrs.get("phi_scale", {})
+    baumgarte = (scenario.system.alpha, scenario.system.beta)
     cons = [c for c in scenario.system.constraint_names if c in columns_compared]
-    return _phi_floors(exudyn_finest, cons, n_steps)
+    return {c: 0.5 * phi_floor(float(scale.get(c, 0.0)), n_steps, h, baumgarte) for c in cons}
 
 
 def halved_runs(scenario, t_end: float, columns_compared, dt: float = EXUDYN_DT,
                 output_dt: float = OUTPUT_DT, solver: SolverSettings = SolverSettings(),
-                max_halvings: int = MAX_HALVINGS, log=None, **run_kw):
+                budget: RefinementBudget = REFINEMENT, log=None, **run_kw):
     """Exudyn's runs at h, h/2, h/4 as crosscheck.halving_gates.HalvedRuns, with solver
     floors.
 
-    h starts at ``dt`` and is halved (at most ``max_halvings`` times) while Exudyn's
-    observed order over the coordinates, velocities and multipliers resolved above their
-    round-off is more than 1 away from 2: a step that does not resolve a flexible mode the
-    run excites is outside the asymptotic regime, where the halving estimate is not the
-    error.  Solver floor of each column: max_t |x_{h/4} - x_{h/4, loose}|, the change of
-    the finest run when both Newton tolerances are loosened LOOSE_FACTOR times (the error a
-    converged Newton leaves is at most proportional to its tolerance, so this bounds it,
-    and it includes the round-off amplification of index 3 in lambda, ~eps |q| / h^2),
-    plus for Phi the round-off of its terms (:func:`_phi_floors`).
+    h starts at ``dt`` and is halved (crosscheck.convergence.refine, within ``budget``)
+    while Exudyn's runs are not in generalized-alpha's asymptotic regime at every compared
+    time: the run-wide order over the coordinates, velocities and multipliers resolved
+    above their floors within 1 of 2, and the local order supporting the error bound at
+    each sample (a start transient of the index-3 solver, or a flexible mode the step does
+    not resolve yet, converges slower at a few samples).  Solver floor of each column:
+    max_t |x_{h/4} - x_{h/4, loose}|, the change of the finest run when both Newton
+    tolerances are loosened LOOSE_FACTOR times (the error a converged Newton leaves is at
+    most proportional to its tolerance, so this bounds it, and it includes the round-off
+    amplification of index 3 in lambda, ~eps |q| / h^2), plus for Phi the round-off of its
+    terms (:func:`_phi_floors`).
     run_kw: passed to :func:`programmed_run` (model, constraint_specs, pin_system, ...).
-    attrs of the returned runs[-1] hold the finest run's attrs; the HalvedRuns' extra facts
-    are returned beside it: (HalvedRuns, info dict with wall times, halvings, dt).
+    Returns (HalvedRuns with .refinement, info dict with wall times, halvings, dt, loose).
     """
     from ..halving_gates import HalvedRuns
     log = log or (lambda msg: None)
     cons = [c for c in scenario.system.constraint_names if c in columns_compared]
     state_cols = [c for c in columns_compared if c not in cons]
-    wall = 0.0
-    runs = []
-    for k in (1, 2, 4):
-        runs.append(programmed_run(scenario, t_end, dt / k, output_dt, solver=solver, **run_kw))
-        wall += runs[-1].attrs["wall_time_s"]
-    halvings = 0
-    while True:
-        trial = HalvedRuns(ENGINE, SCHEME, ORDER, tuple(runs), dt)
-        floors = {c: trial.floor(c, scenario.model) for c in state_cols}
-        p, col, resolved = trial.observed_order(state_cols, floors)
-        if not resolved or abs(p - ORDER) <= 1.0 or halvings >= max_halvings:
-            break
-        log(f"exudyn {scenario.name}: observed order {p:.2f} ({col}) at h = {dt:g} s; "
-            f"halving h")
-        dt /= 2.0
-        halvings += 1
-        runs = runs[1:] + [programmed_run(scenario, t_end, dt / 4, output_dt, solver=solver,
-                                          **run_kw)]
-        wall += runs[-1].attrs["wall_time_s"]
+    walls = []
+
+    def run_at(h):
+        df = programmed_run(scenario, t_end, h, output_dt, solver=solver, **run_kw)
+        walls.append(df.attrs["wall_time_s"])
+        return df
+
+    def floors_of(runs):
+        trial = HalvedRuns(ENGINE, SCHEME, ORDER, runs, dt)
+        return {c: trial.floor(c, scenario.model) for c in state_cols}
+
+    runs, h, _, record = refine(run_at, dt, state_cols, floors_of, ORDER, FINEST, budget,
+                                lambda m: log(f"exudyn {scenario.name}: {m}"))
     finest = runs[-1]
-    loose = programmed_run(scenario, t_end, dt / 4, output_dt, solver=solver.loosened(),
+    loose = programmed_run(scenario, t_end, h / 4, output_dt, solver=solver.loosened(),
                            **run_kw)
-    wall += loose.attrs["wall_time_s"]
-    n_steps = int(finest.attrs["steps"])
+    walls.append(loose.attrs["wall_time_s"])
     floor = {c: float(np.abs(finest[c].to_numpy(float) - loose[c].to_numpy(float)).max())
              for c in columns_compared}
-    for c, f in _phi_floors(finest, cons, n_steps).items():
+    for c, f in _phi_floors(finest, cons).items():
         floor[c] += f
-    out = HalvedRuns(ENGINE, SCHEME, ORDER, tuple(runs), dt, floor)
-    return out, {"wall_time_s": wall, "halvings": halvings, "dt": dt, "loose": loose}
+    out = HalvedRuns(ENGINE, SCHEME, ORDER, tuple(runs), h, floor, refinement=record)
+    return out, {"wall_time_s": float(sum(walls)), "halvings": record.halvings, "dt": h,
+                 "loose": loose}
 
 
 QUICK_T_END = 0.2         # s, run length of the quick (CI) section
@@ -321,6 +329,40 @@ def start_row(scenario, violation, case) -> dict:
                    list(violation), [0.0, 0.0], tol, ["max|Phi(0)|", "max|Phi_dot(0)|"])
 
 
+def consistent_start_state(scenario, log=None):
+    """(q0 (n,), q_dot0 (n,), rows): the start both engines' runs begin from.
+
+    The scenario's own start when it lies on the constraints (rows empty).  Otherwise an
+    index-3 solver would begin by projecting it onto Phi = 0, Phi_dot = 0 in its first step,
+    which gpme's Baumgarte run does not do (it returns to the constraints over ~1/alpha), so
+    the two runs would differ by the start, not by the dynamics: both begin from the
+    start's projection instead (gpme's ProgrammedMotion.consistent_state, confirmed on
+    Exudyn's side by Pinocchio's kinematics, ProgrammedConstraints.check_start), and one
+    information row says so with the size of the projection.  Raises ConstraintError when
+    no projection reaches the constraints (the task is unreachable from that start)."""
+    log = log or (lambda msg: None)
+    pc = ProgrammedConstraints(scenario.constraints, scenario.model)
+    q0 = np.asarray(scenario.q0, float)
+    q_dot0 = np.asarray(scenario.q_dot0, float)
+    try:
+        pc.check_start(0.0, q0, q_dot0, scenario.name)
+        return q0, q_dot0, []
+    except ConstraintError as exc:
+        off = str(exc)
+    qc, qdc = scenario.system.consistent_state(0.0, q0, q_dot0)
+    violation = pc.check_start(0.0, qc, qdc, scenario.name)     # raises if still off
+    dq = float(np.abs(qc - q0).max(initial=0.0))
+    dv = float(np.abs(qdc - q_dot0).max(initial=0.0))
+    text = (f"the model's start is off the programmed constraints ({off.split(';')[0][:200]}); "
+            "an index-3 solver would project it onto them in its first step, gpme's "
+            "Baumgarte run returns to them over ~1/alpha, so both runs begin from its "
+            f"projection (max|dq| = {dq:.3g}, max|dq_dot| = {dv:.3g}; then max|Phi| = "
+            f"{violation[0]:.1e}, max|Phi_dot| = {violation[1]:.1e})")
+    log(f"exudyn {scenario.name}: {text}")
+    return qc, qdc, [_info(scenario, f"{EXACT}: start projected onto the constraints", "-",
+                           text)]
+
+
 def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: float = EXUDYN_DT,
                 **run_kw) -> list:
     """Rows (crosscheck.compare dicts) of the exact programmed run of ``scenario`` in Exudyn
@@ -345,24 +387,31 @@ def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: float 
                 f"steps, above the budget of {MAX_GPME_STEPS:,}")
         log(f"exudyn {scenario.name}: {text}")
         return [_info(scenario, f"{EXACT}: not run", f"{t_end:g} s", text)]
-    # refuse an inconsistent start before gpme's runs are paid for
-    ProgrammedConstraints(scenario.constraints, scenario.model).check_start(
-        0.0, scenario.q0, scenario.q_dot0, scenario.name)
+    q0, q_dot0, start_rows = consistent_start_state(scenario, log)
+    if start_rows:
+        refined = None                       # made from the scenario's own start
     start = time.perf_counter()
     if refined is None:
-        refined = run_gates.refined_gpme_runs(scenario.system, scenario.q0, scenario.q_dot0,
-                                              t_end, dt, OUTPUT_DT)
+        refined = run_gates.refined_gpme_runs(scenario.system, q0, q_dot0, t_end, dt,
+                                              OUTPUT_DT, compared=FINEST,
+                                              log=lambda m: log(f"exudyn {scenario.name}: "
+                                                                f"gpme {m}"))
     gpme_wall = time.perf_counter() - start
     cols = exact_columns(scenario)
-    exu_runs, info = halved_runs(scenario, t_end, cols, exudyn_dt, OUTPUT_DT, log=log, **run_kw)
+    first, note, budget = engine_first_step(scenario, ENGINE, exudyn_dt, REFINEMENT)
+    run_kw = {"q0": q0, "q_dot0": q_dot0, **run_kw}
+    exu_runs, info = halved_runs(scenario, t_end, cols, first, OUTPUT_DT, budget=budget,
+                                 log=log, **run_kw)
     gpme_runs = halving_gates.from_refined(refined)
-    gpme_runs = replace(gpme_runs, solver_floor=gpme_floors(scenario, cols, exu_runs.finest,
-                                                            gpme_runs.n_steps))
-    case = (f"{EXACT}, {t_end:g} s, gpme RK4 dt = {gpme_runs.finest_dt:.3g} s, Exudyn "
-            f"generalized-alpha dt = {exu_runs.finest_dt:.3g} s "
+    gpme_runs = replace(gpme_runs, solver_floor=gpme_floors(
+        scenario, cols, exu_runs.finest, gpme_runs.n_steps, gpme_runs.finest_dt))
+    case = (f"{EXACT}, {t_end:g} s{' from the start projected onto the constraints' if start_rows else ''}, "
+            f"gpme RK4 dt = {gpme_runs.finest_dt:.3g} s, Exudyn "
+            f"generalized-alpha dt = {exu_runs.finest_dt:.3g} s{note} "
             f"({exu_runs.finest.attrs['solver']})")
     rows = halving_gates.run_rows(ENGINE, scenario, gpme_runs, exu_runs, cols, EXACT, case)
     rows.append(start_row(scenario, exu_runs.finest.attrs["start_violation"], case))
+    rows += [dict(r, case=case) for r in start_rows]
     log(f"exudyn {scenario.name}: {t_end:g} s, gpme {gpme_wall:.1f} s, Exudyn "
         f"{info['wall_time_s']:.1f} s (h = {info['dt']:g} s, {info['halvings']} halvings)")
     for r in rows:

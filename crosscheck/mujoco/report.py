@@ -7,7 +7,7 @@ from gpme_core.atomic import atomic_save_figure
 
 from ..compare import FAIL, INFO, row_status
 from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
-from ..reports.rows import write_rows
+from ..reports.rows import own_rows, write_rows
 from ..reports.tables import atomic_write_text, summarise, worst_first
 
 TINY = 1e-18   # floor for log plots of differences
@@ -98,7 +98,7 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
     df: the tidy table; convergence: one row per (scenario, mechanism setting); plots:
     {(section, model name): (model, gpme DataFrame, MuJoCo DataFrame or {label: DataFrame})};
     quick: CI run or full; scenario_names: the scenarios run."""
-    write_rows(df, out_dir, "mujoco")
+    write_rows(own_rows(df, "mujoco"), out_dir, "mujoco")
     st = row_status(df)
     n_fail, n_info = int((st == FAIL).sum()), int((st == INFO).sum())
     ok = n_fail == 0

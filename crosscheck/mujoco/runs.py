@@ -30,6 +30,7 @@ import pandas as pd
 
 from gpme_core.errors import SimulationError
 
+from ..run_gates import phi_term_scale
 from ..constraint_reference import evaluate_reference, reference_constraints
 from .mjcf import mjcf_text
 from .sim import _unstable, chain_map, set_state
@@ -118,7 +119,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float, mj_model
     q0, q_dot0           : (n,) start (default the scenario's)
     Returns t, coordinates, <name>_dot, Phi by name, <name>_dot, lambda_<name>; attrs: dt,
     steps, max_cond_M (cond_2 of mj_fullM at the records), max_abs_q_ddot (of qacc),
-    phi_scale {name: max_t sum_j |A_kj q_j|}, wall_time_s, stages (callback calls).
+    phi_scale {name: max_t sum_j |A_kj| (|q_j| + 1), crosscheck.run_gates.phi_term_scale}, wall_time_s, stages (callback calls).
     """
     model = scenario.model
     mj = mj_model or load(model, dt)
@@ -160,7 +161,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float, mj_model
         max_cond = max(max_cond, float(np.linalg.cond(dense)))
         max_acc = max(max_acc, float(np.abs(data.qacc[cmap.dof]).max()))
         if len(cnames):
-            phi_scale[:] = np.maximum(phi_scale, np.abs(a) @ np.abs(q))
+            phi_scale[:] = np.maximum(phi_scale, phi_term_scale(a, q))
         rows.append([data.time, *q, *v, *phi, *phi_dot, *lam])
 
     set_state(mj, data, cmap, scenario.q0 if q0 is None else q0,

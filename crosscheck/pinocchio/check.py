@@ -59,7 +59,7 @@ from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
                                     reference_constraints)
 from ..reports import tables as report
-from ..reports.rows import write_rows
+from ..reports.rows import own_rows, write_rows
 from ..sampling import state_ranges
 from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
 
@@ -570,7 +570,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_rows(df, out_dir, ENGINE)
+    write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
     report.atomic_write_text(out_dir / "pinocchio.html",
                              _html(df, records, skipped, wall, quick))
     return df

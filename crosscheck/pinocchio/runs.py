@@ -108,7 +108,7 @@ def _run(scenario, t_end, dt, output_dt, ps, constrained, q0, q_dot0):
         m = np.triu(m) + np.triu(m, 1).T           # crba fills at least the upper triangle
         max_cond = max(max_cond, float(np.linalg.cond(m)))
         if len(cnames):
-            phi_scale[:] = np.maximum(phi_scale, np.abs(a) @ np.abs(q))
+            phi_scale[:] = np.maximum(phi_scale, run_gates.phi_term_scale(a, q))
         rows.append([t, *q, *v, *phi, *phi_dot, *lam])
 
     start = time.perf_counter()
@@ -144,7 +144,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float,
     q0, q_dot0           : (n,) start (default the scenario's)
     Returns t, every coordinate and <name>_dot, the constraint values Phi by name and
     <name>_dot, lambda_<name>; attrs: dt, steps, max_cond_M (largest cond_2 of crba's M
-    at the recorded states), max_abs_q_ddot (largest |q_ddot| entry there), phi_scale {name: max_t sum_j |A_kj q_j|}, wall_time_s.
+    at the recorded states), max_abs_q_ddot (largest |q_ddot| entry there), phi_scale {name: max_t sum_j |A_kj| (|q_j| + 1), crosscheck.run_gates.phi_term_scale}, wall_time_s.
     """
     ps = pin_system or from_gpme(scenario.model)
     return _run(scenario, t_end, dt, output_dt, ps, True,

@@ -207,6 +207,22 @@ def _merge(path, new, keep):
     return new
 
 
+def own_rows(df, engine):
+    """The rows of ``df`` that judge ``engine``'s own numbers (a step's table may also hold
+    rows of a prerequisite it judged on the way, e.g. gpme's observed order in the
+    Pinocchio step: those are gpme's checks, written with gpme's rows)."""
+    if not len(df) or "engine" not in df.columns:
+        return df
+    return df[df["engine"] == engine]
+
+
+def other_rows(df, engine):
+    """The rows of ``df`` that belong to other engines than ``engine`` (see own_rows)."""
+    if not len(df) or "engine" not in df.columns:
+        return df.iloc[0:0]
+    return df[df["engine"] != engine]
+
+
 def write_rows(df, out_dir, engine) -> List[Path]:
     """Write ``engine``'s rows into ``out_dir``; returns the paths written.
 

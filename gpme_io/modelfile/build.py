@@ -275,6 +275,7 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                     source=spec.path, urdf=source.urdf, chain=source.chain,
                     frozen=dict(source.frozen), notes=tuple(notes),
                     tolerances=spec.tolerance_map(), on_constraints=spec.initial.on_constraints,
+                    engine_steps=spec.engine_step_map(),
                     yield_strengths=_yield_strengths(spec, model))
 
 

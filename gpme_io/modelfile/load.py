@@ -20,7 +20,7 @@ import numpy as np
 from gpme_core import time_functions as tfn
 from gpme_core.errors import ConstraintError, ModelError
 from gpme_examples.crane import CraneParameters
-from gpme_io.scenario import INTEGRATORS, ToleranceOverride
+from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
 
 from . import expressions as ex
 from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, POINT_SYMBOLS, SECTION_SHAPES,
@@ -30,13 +30,18 @@ from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, POINT_SYMBOLS, SECT
                      SectionSpec, SolverSpec, UrdfSource)
 
 TOP_LEVEL = ("model", "chain", "flexible", "joint", "drive", "constraint", "programme",
-             "solver", "initial", "run", "tolerance")
-ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "constraint", "programme", "tolerance")
+             "solver", "initial", "run", "tolerance", "engine_step")
+ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "constraint", "programme", "tolerance",
+                    "engine_step")
 ROBOT_DATA_PREFIX = "example-robot-data:"
 ROBOT_DATA_DISTRIBUTION = "example-robot-data"
 ROBOT_DATA_ROOT = "cmeel.prefix/share/example-robot-data/robots/"
 ROBOTS_EXTRA_HINT = "install the optional extra: pip install -e '.[robots]'"
-TOLERANCE_ENGINES = ("gpme", "pinocchio", "mujoco")   # gpme: the run checks (crosscheck.run_checks)
+# gpme: the run checks (crosscheck.run_checks) and the observed order of its own runs
+TOLERANCE_ENGINES = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
+# engines that integrate with their own scheme and step ([[engine_step]]); Pinocchio's and
+# MuJoCo's runs use gpme's RK4 step ([run] dt)
+STEP_ENGINES = ("drake", "exudyn")
 DEFAULT_BAUMGARTE = (20.0, 20.0)
 QUICK_T_END = 1.0           # s, default quick_t_end = min(t_end, 1 s)
 DEFAULT_OUTPUT_DT = 1e-3    # s
@@ -285,9 +290,14 @@ def parse_model_data(data: dict, path: Path) -> tuple:
                        if (t := _tolerance(c, e, f"tolerance[{k}]")) is not None)
     _unique(c, [(f"tolerance[{k}]", t.check) for k, t in enumerate(tolerances)], "check",
             "tolerance")
+    engine_steps = tuple(x for k, e in enumerate(entries["engine_step"])
+                         if (x := _engine_step(c, e, f"engine_step[{k}]", t_end)) is not None)
+    _unique(c, [(f"engine_step[{k}]", x.engine) for k, x in enumerate(engine_steps)],
+            "engine", "engine_step")
     mf = ModelFile(path=path, model=model, chain=chain, flexible=flexible, joints=joints,
                    drives=drives, constraints=constraints, programmes=programmes,
-                   solver=solver, initial=initial, run=run, tolerances=tolerances)
+                   solver=solver, initial=initial, run=run, tolerances=tolerances,
+                   engine_steps=engine_steps)
     return mf, c.problems
 
 
@@ -760,6 +770,31 @@ def _run_section(c: _Checker, data: dict) -> Optional[RunSpec]:
         return None
     return RunSpec(t_end, quick if quick is not None else min(t_end, QUICK_T_END), integrator,
                    dt, output_dt if output_dt is not None else min(DEFAULT_OUTPUT_DT, t_end))
+
+
+MAX_ENGINE_HALVINGS = 8     # 2^8 = 256 x the first step's cost for the last run
+
+
+def _engine_step(c: _Checker, e: dict, path: str, t_end) -> Optional[EngineStep]:
+    c.keys(e, ("engine", "dt", "reason", "max_halvings"), path)
+    n0 = len(c.problems)
+    engine = c.string(e, "engine", path, "the engine whose first step this is",
+                      choices=STEP_ENGINES)
+    dt = c.number(e, "dt", path, "s, the engine's first (coarsest) step", rule=">0")
+    reason = c.string(e, "reason", path, "why this step suits this model")
+    halvings = None
+    if "max_halvings" in e:
+        v = e["max_halvings"]
+        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_ENGINE_HALVINGS:
+            c.add(f"{path}.max_halvings", f"must be a whole number from 0 to "
+                  f"{MAX_ENGINE_HALVINGS} (halvings beyond the first three runs), got {v!r}")
+        else:
+            halvings = v
+    if dt is not None and t_end is not None and dt > t_end:
+        c.add(f"{path}.dt", f"must be <= t_end = {t_end!r} s, got {dt!r}")
+    if len(c.problems) > n0:
+        return None
+    return EngineStep(engine, dt, reason, halvings)
 
 
 def _tolerance(c: _Checker, e: dict, path: str) -> Optional[ToleranceOverride]:

@@ -236,6 +236,7 @@ class ModelFile:
     initial: InitialSpec = InitialSpec()
     run: Optional[RunSpec] = None
     tolerances: tuple = ()      # ToleranceOverride, in file order
+    engine_steps: tuple = ()    # EngineStep, in file order
 
     @property
     def n_constraints(self) -> int:
@@ -243,3 +244,6 @@ class ModelFile:
 
     def tolerance_map(self) -> Mapping[str, ToleranceOverride]:
         return {t.check: t for t in self.tolerances}
+
+    def engine_step_map(self) -> Mapping[str, "EngineStep"]:
+        return {s.engine: s for s in self.engine_steps}
