@@ -18,7 +18,9 @@ ellipse or a programme's amplitude does not recompile; only SymPy expressions be
 Systems without SymPy parts use gpme_core.kernels itself; with them, a module is
 generated from gpme_core/kernels.py with the stub section replaced, written once per
 distinct source under GPME_KERNEL_CACHE (default ~/.cache/gpme/kernels) and compiled by
-numba with its on-disk cache, so a second process does not compile again.
+numba with its on-disk cache, so a second process does not compile again.  That cache is
+gpme_core.jit_cache's, as for gpme_core.kernels itself: its stamp covers the generated file
+and the gpme_core modules it imports (fast.py), so an edit of fast.py compiles it again.
 """
 import hashlib
 import importlib.util

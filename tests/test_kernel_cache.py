@@ -143,12 +143,15 @@ def test_the_stamp_covers_the_imported_gpme_core_modules(tmp_path):
     assert jit_cache.source_stamp(generated) != stamp
 
 
-def test_the_stamp_follows_numba_code_settings(monkeypatch):
+def test_numba_code_settings_name_their_own_cache_files(monkeypatch):
     """numba's index key does not hold NUMBA_BOUNDSCHECK: a cache written without bounds
     checks was loaded with them (the mutation kill suite sets it)."""
-    stamp = jit_cache.source_stamp(kernels.__file__)
+    plain = jit_cache.KernelCache(kernels.evaluate.py_func)
     monkeypatch.setattr(config, "BOUNDSCHECK", 1)
-    assert jit_cache.source_stamp(kernels.__file__) != stamp
+    checked = jit_cache.KernelCache(kernels.evaluate.py_func)
+    names = [c._impl.filename_base for c in (plain, checked)]
+    assert names[0] != names[1]
+    assert all(n.startswith("kernels.evaluate-") for n in names)
 
 
 def _module_function(directory):
