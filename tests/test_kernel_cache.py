@@ -15,6 +15,9 @@ own in-tree numba cache):
    another file), no cache cleared: evaluate is compiled again (a miss, a new stamp in the
    index) and its accelerations change.
 
+Runtime: ~40 s when this checkout's cache is warm (test_compiled.py warms it in a full run:
+one compile, for step 3), ~90 s cold (two compiles; ~37 s of CPU on two shared cores).
+
 The other tests check, without compiling, which files a stamp covers, that the cache stays
 where numba would put it (NUMBA_CACHE_DIR, in-tree, user-wide when the source directory is
 not writable), that other numba code in the process keeps numba's own cache, and that every
