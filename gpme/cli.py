@@ -81,61 +81,129 @@ def mujoco_name_problems(scenarios):
         raise ModelError(problems)
 
 
+# failed checks named in the closing summary line of `gpme simulate` (the others counted)
+SUMMARY_FAILURES = 3
+
+
+def _print_checks(rows):
+    """One line per check of a run (crosscheck.run_checks.run_rows): the worst value, where
+    it sits, and ok / FAIL with the tolerance, or information."""
+    from crosscheck.run_checks import WARNING
+    for row in rows:
+        if row["status"] == "info":
+            flag = "WARNING, " + row["reason"] if row["reason"].startswith(WARNING) \
+                else "information"
+            print(f"  {row['quantity']}: {row['gpme_value']:.3g} at {row['entry']} ({flag})")
+        else:
+            print(f"  {row['quantity']}: {row['abs_error']:.2e} at {row['entry']} "
+                  f"({'ok' if row['status'] == 'pass' else 'FAIL'}, tolerance "
+                  f"{row['tol_abs'] + row['tol_rel'] * row['scale']:.1e})")
+
+
+def _run_checked(label, run, checks, estimate, accurate, force, start):
+    """(history, check rows) of one model: with ``accurate`` (RK4 without --dt) the run at
+    the step gpme.accurate_step chooses, else ``run(None)`` as given; its checks printed."""
+    from gpme.accurate_step import run_accurately
+    if accurate:
+        choice = run_accurately(run, checks, estimate=estimate, force=force, start=start,
+                                report=lambda line: print(f"  {line}", flush=True))
+        df, rows = choice.df, choice.rows
+        print(f"  {choice.note}")
+    else:
+        df = run(None)
+        rows = checks(df)
+    _print_checks(rows)
+    return df, [{**r, "label": label} for r in rows]
+
+
+def checks_summary(rows):
+    """The closing line of `gpme simulate`: the counts of passed, failed and information
+    checks, and the failed ones (at most SUMMARY_FAILURES, the worst first, each with its
+    worst value, where, and its tolerance)."""
+    from gpme.accurate_step import gated_errors
+    failed = [r for r in rows if r["status"] == "fail"]
+    counts = (f"{sum(r['status'] == 'pass' for r in rows)} pass, {len(failed)} fail, "
+              f"{sum(r['status'] == 'info' for r in rows)} information")
+    if not failed:
+        return f"checks: {counts}"
+    errors = sorted(((e, r["label"]) for r in failed for e in gated_errors([r])),
+                    key=lambda pair: -pair[0].ratio)
+    named = "; ".join(f"{label}: {e.describe()}" for e, label in errors[:SUMMARY_FAILURES])
+    more = (f"; and {len(errors) - SUMMARY_FAILURES} more" if len(errors) > SUMMARY_FAILURES
+            else "")
+    return f"FAIL: checks: {counts}: {named}{more}"
+
+
 def _simulate_paper(args):
-    """The paper's two crane runs with the paper's figures (no --model)."""
+    """The paper's two crane runs with the paper's figures (no --model), each judged by the
+    same checks as a model file's run (crosscheck.run_checks)."""
+    from crosscheck.run_checks import run_rows
     from gpme.budget import run_budget, wall_limit
     from gpme_examples import paper
+    from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     t_end = args.t_end or (CRANE_QUICK_T_END if args.quick else CRANE_T_END)
     n_rfe = paper.DEFAULT_N_RFE if args.n_rfe is None else args.n_rfe
-    runs = {}
+    method = args.method or "RK4"
+    runs, rows = {}, []
     for case in cases:
         label = case if case == "rigid" else f"flexible (n_rfe={n_rfe})"
+        n = 0 if case == "rigid" else n_rfe
+        scenario = crane_scenario(n, on_constraints=args.on_manifold,
+                                  static_arm=args.static_arm)
+        settings = dict(n_rfe=n_rfe, t_end=t_end, method=method, on_manifold=args.on_manifold,
+                        static_arm=args.static_arm)
+
+        def run(dt, case=case, label=label, settings=settings):
+            df = paper.run_case(case, dt=args.dt if dt is None else dt,
+                                progress=not args.no_progress,
+                                before_run=run_budget(label, args.force),
+                                max_wall_s=wall_limit(args.force), **settings)
+            print(f"  wall time {df.attrs['wall_time_s']:.1f} s", flush=True)
+            return df
+
+        def estimate(dt, case=case, settings=settings):
+            return paper.run_case(case, dt=dt, estimate_only=True, **settings)
+
         print(f"simulating {label}, t_end = {t_end:g} s ...", flush=True)
-        runs[case] = paper.run_case(case, n_rfe=n_rfe, t_end=t_end, dt=args.dt,
-                                    method=args.method or "RK4", on_manifold=args.on_manifold,
-                                    static_arm=args.static_arm, progress=not args.no_progress,
-                                    before_run=run_budget(label, args.force),
-                                    max_wall_s=wall_limit(args.force))
-        s = paper.summary(runs[case], transient=min(2.0, 0.5 * t_end))
-        print(f"  wall time {s['wall_time_s']:.1f} s; max |Phi_1| = "
-              f"{s['max_abs_Phi_1_after_transient']:.2e}, max |Phi_2| = "
-              f"{s['max_abs_Phi_2_after_transient']:.2e} after the transient")
-        for peak in s["elastic_peaks"]:
-            print(f"  {peak['link']}: peak sde bending angle {peak['bending_angle']:.3g} rad, "
-                  f"torsion {peak['torsion_angle']:.3g} rad, bending stress "
-                  f"{peak['bending_stress'] / 1e6:.4g} MPa (allowed "
-                  f"{peak['allowed_stress'] / 1e6:.4g} MPa)")
-            for warning in peak["warnings"]:
-                print(f"  WARNING: {warning}")
-    return paper.write_outputs(runs, args.out)
+        runs[case], case_rows = _run_checked(
+            label, run, lambda df, scenario=scenario: run_rows(scenario, df), estimate,
+            accurate=method == "RK4" and args.dt is None, force=args.force,
+            start="the paper's step")
+        rows += case_rows
+    return paper.write_outputs(runs, args.out), rows
 
 
 def _simulate_models(args):
+    from crosscheck.run_checks import run_rows
     from gpme.budget import run_budget, wall_limit
     from gpme.runs import simulate_scenario, write_run_outputs
-    from crosscheck.run_checks import WARNING, run_rows
-    paths = {}
+    paths, rows = {}, []
     for scenario in load_scenarios(args.model):
         t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
         print(f"simulating {scenario.name}: {scenario.model.n_coordinates} coordinates, "
               f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
-        df = simulate_scenario(scenario, t_end=t_end, dt=args.dt, method=args.method,
-                               progress=not args.no_progress,
-                               before_run=run_budget(scenario.name, args.force),
-                               max_wall_s=wall_limit(args.force))
-        print(f"  wall time {df.attrs['wall_time_s']:.1f} s")
-        for row in run_rows(scenario, df):
-            if row["status"] == "info":
-                flag = "WARNING, " + row["reason"] if row["reason"].startswith(WARNING) \
-                    else "information"
-                print(f"  {row['quantity']}: {row['gpme_value']:.3g} at {row['entry']} ({flag})")
-            else:
-                print(f"  {row['quantity']}: {row['abs_error']:.2e} at {row['entry']} "
-                      f"({'ok' if row['status'] == 'pass' else 'FAIL'}, tolerance "
-                      f"{row['tol_abs'] + row['tol_rel'] * row['scale']:.1e})")
+
+        def run(dt, scenario=scenario, t_end=t_end):
+            df = simulate_scenario(scenario, t_end=t_end, dt=args.dt if dt is None else dt,
+                                   method=args.method, progress=not args.no_progress,
+                                   before_run=run_budget(scenario.name, args.force),
+                                   max_wall_s=wall_limit(args.force))
+            print(f"  wall time {df.attrs['wall_time_s']:.1f} s", flush=True)
+            return df
+
+        def estimate(dt, scenario=scenario, t_end=t_end):
+            return simulate_scenario(scenario, t_end=t_end, dt=dt, method="RK4",
+                                     estimate_only=True)
+
+        method = args.method or scenario.integrator
+        df, model_rows = _run_checked(
+            scenario.name, run, lambda df, scenario=scenario: run_rows(scenario, df), estimate,
+            accurate=method == "RK4" and args.dt is None, force=args.force,
+            start="the model's step")
+        rows += model_rows
         paths.update(write_run_outputs(scenario, df, args.out))
-    return paths
+    return paths, rows
 
 
 def _simulate(args):
@@ -165,12 +233,13 @@ def _simulate(args):
     from gpme.out_lock import exclusive_output
     try:
         with exclusive_output(args.out):
-            paths = _simulate_models(args) if args.model else _simulate_paper(args)
+            paths, rows = _simulate_models(args) if args.model else _simulate_paper(args)
     except GpmeError as exc:
         return _error(exc)
     for p in paths.values():
         print(f"wrote {p}")
-    return EXIT_OK
+    print(checks_summary(rows), flush=True)
+    return EXIT_FAILED if any(r["status"] == "fail" for r in rows) else EXIT_OK
 
 
 def _crosscheck(args):
