@@ -62,11 +62,13 @@ def wall_limit(force):
     return None if force else RUN_WALL_LIMIT_S
 
 
-def run_budget(label, force=False, out=sys.stdout):
+def run_budget(label, force=False, out=None):
     """A ``before_run`` callable for gpme_core.integrate.simulate: prints the estimate of run
-    ``label`` and raises BudgetError above the limits unless ``force``."""
+    ``label`` (to ``out``, default the sys.stdout of the moment) and raises BudgetError above
+    the limits unless ``force``."""
     def check(cost):
-        print(f"  estimate: {cost.describe()}", file=out, flush=True)
+        stream = sys.stdout if out is None else out
+        print(f"  estimate: {cost.describe()}", file=stream, flush=True)
         problems = over_budget(cost)
         if problems and not force:
             raise BudgetError(
@@ -75,6 +77,6 @@ def run_budget(label, force=False, out=sys.stdout):
                 "recording interval, use fewer RFEM segments, or give --force to run it "
                 "anyway")
         if problems:
-            print(f"  --force: running although {' and '.join(problems)}", file=out,
+            print(f"  --force: running although {' and '.join(problems)}", file=stream,
                   flush=True)
     return check
