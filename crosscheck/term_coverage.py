@@ -61,7 +61,7 @@ REPO = Path(__file__).resolve().parent.parent
 ZERO_RELATIVE = 1e-12
 # A term at most this fraction of its scale is weak: it is zero on the exact motion and
 # shows up only through the run's drift off its constraints (the UR5's rotating "angle"
-# constraint has 2 grad(phi_t).p_dot ~ 3e-10 of its kappa on the run: zero on the circle).
+# constraint has 2 grad(phi_t).p_dot ~ 5e-12 of its scale on the run: zero on the circle).
 # A factor wrong by 10 % in a term of 1e-6 of its scale changes the acceleration by 1e-7
 # of the scale, comparable with the RK4 error the run gates allow over a quick run, so a
 # fault there may pass every check.  A term must exceed this in some example to count.
@@ -84,6 +84,7 @@ PHI, ROW, PHI_T, DRIFT, HESS, GRAD_T, PHI_TT = (
 PIECES = (PHI, ROW, PHI_T, DRIFT, HESS, GRAD_T, PHI_TT)
 KAPPA_PIECES = (DRIFT, HESS, GRAD_T, PHI_TT)
 _A_QDOT = "A q_dot"
+_PHI_DOT_BOUND, _KAPPA_BOUND = "phi_dot bound", "kappa bound"
 # Pieces a kind cannot have, by its definition in gpme_core.constraints: an ellipse does
 # not depend on t; a coordinate programme p[axis] - f(t) is linear in p with a constant
 # gradient; a joint programme q_k - f(t) has no point (its kappa is -f'').  They are not
@@ -139,8 +140,13 @@ SCALES = MappingProxyType({
              "the examples' links are ~0.3-1 m)",
     "distance": "the constraint's largest Jacobian entry max |A| times 1 m or 1 rad, so "
                 "that |Phi| / scale is the distance from the constraint",
-    "phi_dot": "the constraint's largest max(|A q_dot|, |Phi_t|): the two parts of Phi_dot",
-    "kappa": "the constraint's largest kappa piece: the four pieces of one sum",
+    "phi_dot": "the constraint's largest |grad(phi)| |p_dot| + |Phi_t| (a joint programme: "
+               "|q_dot_k| + |f'|), the sizes of the two parts of Phi_dot",
+    "kappa": "the constraint's largest |grad(phi)| |d| + |p_dot|^2 ||Hess(phi)|| + "
+             "2 |grad(phi_t)| |p_dot| + |phi_tt| (a joint programme: |f''|): the bounds of "
+             "the four pieces by the sizes of their factors (Cauchy-Schwarz), so that a piece "
+             "that vanishes by cancellation, a gradient's rate orthogonal to the velocity, "
+             "is zero even when every other piece vanishes too",
 })
 
 
@@ -355,23 +361,30 @@ def run_example(scenario, t_end: Optional[float] = None, compiled: bool = True):
 def constraint_pieces(model, spec, bound, t: float, kin, q: NDArray[np.float64],
                       q_dot: NDArray[np.float64]) -> dict:
     """{piece: value} of one constraint at (t s, q, q_dot): PIECES (ROW (n,), the others
-    scalars in [Phi], [Phi]/s, [Phi]/s^2) and "A q_dot", from the engine's public
-    functions: point_kinematics and ``spec.local_terms`` for a point constraint (``bound``
-    its bound form, with link and r_local), the time function's derivatives for a joint
-    programme.  kin: gpme_core.kinematics.ChainKinematics at q."""
+    scalars in [Phi], [Phi]/s, [Phi]/s^2), "A q_dot", and the bounds of the pieces of
+    Phi_dot and kappa by the sizes of their factors (SCALES "phi_dot", "kappa"), from the
+    engine's public functions: point_kinematics and ``spec.local_terms`` for a point
+    constraint (``bound`` its bound form, with link and r_local), the time function's
+    derivatives for a joint programme.  kin: gpme_core.kinematics.ChainKinematics at q."""
     if isinstance(spec, JointProgramme):
         k = model.index(spec.coordinate)
         f, f_t, f_tt = spec.function.derivatives(t)
         row = np.zeros(model.n_coordinates)
         row[k] = 1.0
         return {PHI: q[k] - f, ROW: row, _A_QDOT: float(q_dot[k]), PHI_T: -f_t,
-                DRIFT: 0.0, HESS: 0.0, GRAD_T: 0.0, PHI_TT: -f_tt}
+                DRIFT: 0.0, HESS: 0.0, GRAD_T: 0.0, PHI_TT: -f_tt,
+                _PHI_DOT_BOUND: abs(q_dot[k]) + abs(f_t), _KAPPA_BOUND: abs(f_tt)}
     pk = point_kinematics(model, kin, q_dot, bound.link, bound.r_local)
     phi, grad, hess, phi_t, grad_t, phi_tt = spec.local_terms(pk.position, t)
     v = pk.velocity
+    speed, slope = float(np.linalg.norm(v)), float(np.linalg.norm(grad))
     return {PHI: float(phi), ROW: grad @ pk.jacobian, _A_QDOT: float(grad @ v),
             PHI_T: float(phi_t), DRIFT: float(grad @ pk.drift), HESS: float(v @ hess @ v),
-            GRAD_T: 2.0 * float(grad_t @ v), PHI_TT: float(phi_tt)}
+            GRAD_T: 2.0 * float(grad_t @ v), PHI_TT: float(phi_tt),
+            _PHI_DOT_BOUND: slope * speed + abs(phi_t),
+            _KAPPA_BOUND: (slope * float(np.linalg.norm(pk.drift))
+                           + speed ** 2 * float(np.linalg.norm(hess, 2))
+                           + 2.0 * float(np.linalg.norm(grad_t)) * speed + abs(phi_tt))}
 
 
 class _Maxima:
@@ -400,10 +413,8 @@ def _check_agreement(scenario, name, kind, t, pieces, engine):
     row_scale = float(np.abs(row).max())
     checks = (
         ("Phi", pieces[PHI], phi, row_scale),
-        ("Phi_dot", pieces[_A_QDOT] + pieces[PHI_T], phi_dot,
-         max(abs(pieces[_A_QDOT]), abs(pieces[PHI_T]))),
-        ("kappa", sum(pieces[p] for p in KAPPA_PIECES), kappa,
-         max(abs(pieces[p]) for p in KAPPA_PIECES)),
+        ("Phi_dot", pieces[_A_QDOT] + pieces[PHI_T], phi_dot, pieces[_PHI_DOT_BOUND]),
+        ("kappa", sum(pieces[p] for p in KAPPA_PIECES), kappa, pieces[_KAPPA_BOUND]),
         ("A", pieces[ROW], row, row_scale))
     worst = 0.0
     for what, mine, theirs, scale in checks:
@@ -461,8 +472,8 @@ def evaluate_terms(scenario, df, stride: int = 1) -> tuple:
             m = per_constraint[c]
             for piece in PIECES:
                 m.put(piece, pieces[piece])
-            m.put("phi_dot", (pieces[_A_QDOT], pieces[PHI_T]))
-            m.put("kappa", [pieces[p] for p in KAPPA_PIECES])
+            m.put("phi_dot", pieces[_PHI_DOT_BOUND])
+            m.put("kappa", pieces[_KAPPA_BOUND])
     force = dyn.get("force")
     values = {"M": TermValue(dyn.get("M"), dyn.get("M")),
               "h": TermValue(dyn.get("h"), force), "g": TermValue(dyn.get("g"), force)}
@@ -617,8 +628,9 @@ programme's time function), and checks at every sample that the pieces reproduce
 engine's own Phi, A, Phi_dot and kappa (`gpme_core.constraints.evaluate_constraints`) to
 {AGREEMENT:g} of their scales.
 
-Regenerate this page (about 2 minutes with a warm numba cache; exit status 1 when a
-required term is exercised by no example):
+Regenerate this page (about 20 s once the examples' compiled kernels are in numba's
+cache, a few minutes before; exit status 1 when a required term is exercised by no
+example):
 
     .venv/bin/python -m crosscheck.term_coverage --write docs/coverage.md
 
@@ -639,8 +651,8 @@ A term's largest value along the run is compared with a scale of its own equatio
   are 0 or at most ~1e-14 of their scales.
 - **weak**: at most {WEAK_RELATIVE:g} of the scale: zero on the exact motion, non-zero only
   through the run's drift off its constraints (the UR5's rotating `angle` constraint has
-  `2 grad(phi_t).p_dot` at ~3e-10 of its kappa: on the circle its gradient's rate is radial
-  and the velocity tangential).  A factor wrong by 10 % in such a term changes the
+  `2 grad(phi_t).p_dot` at ~5e-12 of its scale: on the circle its gradient's rate is
+  radial and the velocity tangential).  A factor wrong by 10 % in such a term changes the
   acceleration by at most 1e-7 of the scale, comparable with the RK4 error the run gates
   allow over a quick run, so a fault there may pass.  A required term counts as
   **exercised** only above {WEAK_RELATIVE:g} of its scale in some example.
@@ -670,8 +682,10 @@ are those of the non-RFEM coordinates.
 
 ## Largest value along the run
 
-`**0**` zero, `*weak*` weak, `—` the example has no such term; last column: the largest
-largest/scale over the examples and which.
+`**0**` zero, `*weak*` weak, `—` the example has no such term.  Where an example has
+several constraints of one kind, a cell is that of the constraint in which the term is
+largest relative to its scale.  Last column: the largest largest/scale over the examples
+and which.
 
 {markdown_table(coverages)}
 
