@@ -602,6 +602,11 @@ def examples_text(coverages: Sequence[ExampleCoverage]) -> str:
     return "\n".join(out)
 
 
+def _largest_zero(coverages):
+    return max([v.relative for c in coverages for v in c.values.values()
+                if v.status == ZERO and math.isfinite(v.relative)], default=0.0)
+
+
 def page_text(coverages: Sequence[ExampleCoverage], command: str) -> str:
     """docs/coverage.md: what the tool does, the thresholds and scales, the examples, the
     table and the verdict (generated: edit crosscheck/term_coverage.py, not the page)."""
@@ -647,21 +652,22 @@ A term's largest value along the run is compared with a scale of its own equatio
 - **zero**: at most {ZERO_RELATIVE:g} of the scale.  Every term is computed in double
   precision (eps = 2.2e-16) from numbers of the size of its scale through at most a few
   hundred operations, so a term that is zero in exact arithmetic comes out below ~1e-13 of
-  the scale; {ZERO_RELATIVE:g} leaves a factor 10 for cancellation.  The zero terms below
-  are 0 or at most ~1e-14 of their scales.
+  the scale; {ZERO_RELATIVE:g} leaves a factor 10 for cancellation.  The zero cells below
+  are at most {_largest_zero(coverages):.0e} of their scales.
 - **weak**: at most {WEAK_RELATIVE:g} of the scale: zero on the exact motion, non-zero only
   through the run's drift off its constraints (the UR5's rotating `angle` constraint has
   `2 grad(phi_t).p_dot` at ~5e-12 of its scale: on the circle its gradient's rate is
-  radial and the velocity tangential).  A factor wrong by 10 % in such a term changes the
-  acceleration by at most 1e-7 of the scale, comparable with the RK4 error the run gates
-  allow over a quick run, so a fault there may pass.  A required term counts as
-  **exercised** only above {WEAK_RELATIVE:g} of its scale in some example.
+  radial and the velocity tangential).  A factor wrong by 10 % in such a term moves the
+  acceleration by at most 1e-7 of the term's scale; whether a run comparison sees that
+  depends on the integration error it allows, so such a term is not counted.  A required
+  term counts as **exercised** only above {WEAK_RELATIVE:g} of its scale in some example.
 - (†) not required: **Phi**.  A run that starts on its constraints (`on_constraints =
   true`, every example but the paper's crane) keeps Phi at round-off by design.  Phi off
-  its zero set enters only the Baumgarte term `beta^2 Phi`, one line shared by all kinds
-  and exercised by the crane's off-manifold start (ellipse and coordinate rows); a Phi
-  with a wrong zero set moves the run off its programme, which the reference engines see
-  (`crosscheck/constraint_reference.py` derives Phi on their side).
+  its zero set enters the equations of motion only through the Baumgarte term
+  `beta^2 Phi`, one line shared by all kinds and exercised by the crane's off-manifold
+  start (ellipse and coordinate rows); a Phi with a wrong zero set moves the run off its
+  programme, which the reference engines see (`crosscheck/constraint_reference.py`
+  derives Phi on their side).
 
 Units: `[Phi]` is the constraint's own unit: 1 for an ellipse, m for a coordinate
 programme, rad or m (the joint's) for a joint programme, the formula's for an expression
