@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpme.budget import MAX_CSV_BYTES, MAX_WALL_S
+from gpme.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
 from gpme.out_lock import output_dir_problem
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
@@ -317,7 +317,14 @@ def build_parser():
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     sim = sub.add_parser("simulate", help="run a model (default: the paper's crane) and write "
-                                          "CSV histories and figures")
+                                          "CSV histories and figures; its checks printed, exit "
+                                          "status 1 when one fails",
+                         description="Run each model (default: the paper's crane), write its "
+                                     "history and figures, and judge the run by its own checks "
+                                     "(constraints after the Baumgarte transient, energy "
+                                     "balance).  Exit status: 0 every check passes or is "
+                                     "information, 1 a check failed (one closing line names "
+                                     "them), 2 bad input.")
     _model_option(sim)
     sim.add_argument("--case", choices=("rigid", "flexible", "both"), default="both",
                      help="built-in crane only")
@@ -328,9 +335,12 @@ def build_parser():
     sim.add_argument("--quick", action="store_true",
                      help="the model file's quick_t_end (the crane: 2 s)")
     sim.add_argument("--dt", type=float, default=None,
-                     help="RK4 step in s (default: the model file's, else half the stability "
-                          "limit; refused above the limit); RadauIIA's fixed step (default "
-                          "1 ms); with an adaptive --method its largest step")
+                     help="RK4 step in s, used as given (refused above the stability limit); "
+                          "default: the model file's (else half the stability limit; the "
+                          "crane: the paper's) halved until the run's own checks pass, at "
+                          f"most {MAX_STEP_HALVINGS} times (docs/runs.md); RadauIIA's fixed "
+                          "step (default 1 ms); "
+                          "with an adaptive --method its largest step")
     sim.add_argument("--method", choices=("RK4", "RadauIIA", "RK45", "DOP853", "Radau"),
                      default=None,
                      help="RK4 (explicit, fixed step), RadauIIA (implicit order 5, fixed "
