@@ -111,7 +111,8 @@ def test_uniform_rotation_does_not_exercise_the_moving_gradient(tmp_path):
     text = MY_ARM.read_text()
     head = text[:text.index("[[constraint]]")]
     path = tmp_path / "rotating.toml"
-    path.write_text(head.replace('urdf = "my_arm.urdf"', f'urdf = "{MY_ARM.parent.as_posix()}/my_arm.urdf"') + """
+    urdf = (MY_ARM.parent / "my_arm.urdf").as_posix()
+    path.write_text(head.replace('urdf = "my_arm.urdf"', f'urdf = "{urdf}"') + """
 [[constraint]]
 name = "circle"
 frame = "tool"
