@@ -369,10 +369,24 @@ BAD = [
     ("tolerance-no-reason", dict(extra='[[tolerance]]\ncheck = "pinocchio/M"\nabs = 1e-12\n'
                                        'rel = 1e-10\nreason = ""\n'),
      r"tolerance\[0\]\.reason: must be a non-empty string \(why this tolerance holds"),
-    ("tolerance-engine", dict(extra='[[tolerance]]\ncheck = "drake/M"\nabs = 1e-12\n'
+    ("tolerance-engine", dict(extra='[[tolerance]]\ncheck = "bullet/M"\nabs = 1e-12\n'
                                     'rel = 1e-10\nreason = "r"\n'),
-     r"tolerance\[0\]\.check: 'drake/M' must be \"<engine>/<quantity>\" with engine one of "
-     r"gpme, pinocchio, mujoco"),
+     r"tolerance\[0\]\.check: 'bullet/M' must be \"<engine>/<quantity>\" with engine one of "
+     r"gpme, pinocchio, mujoco, drake, exudyn"),
+    ("engine-step-engine", dict(extra='[[engine_step]]\nengine = "mujoco"\ndt = 1e-4\n'
+                                      'reason = "r"\n'),
+     r"engine_step\[0\]\.engine: 'mujoco' is not one of 'drake', 'exudyn'"),
+    ("engine-step-dt", dict(extra='[[engine_step]]\nengine = "exudyn"\ndt = -1e-4\n'
+                                  'reason = "r"\n'),
+     r"engine_step\[0\]\.dt: must be > 0"),
+    ("engine-step-reason", dict(extra='[[engine_step]]\nengine = "exudyn"\ndt = 1e-4\n'),
+     r"engine_step\[0\]\.reason: missing"),
+    ("engine-step-halvings", dict(extra='[[engine_step]]\nengine = "drake"\ndt = 1e-4\n'
+                                        'max_halvings = 20\nreason = "r"\n'),
+     r"engine_step\[0\]\.max_halvings: must be a whole number from 0 to 8"),
+    ("engine-step-twice", dict(extra=('[[engine_step]]\nengine = "drake"\ndt = 1e-4\n'
+                                      'reason = "r"\n') * 2),
+     r"engine_step\[1\]\.engine: engine_step 'drake' is already given in engine_step\[0\]"),
     ("tolerance-negative", dict(extra='[[tolerance]]\ncheck = "mujoco/E_kin"\nabs = -1.0\n'
                                       'rel = 0.0\nreason = "r"\n'),
      r"tolerance\[0\]\.abs: must be >= 0"),
@@ -558,3 +572,20 @@ def test_urdf_names_are_checked_by_the_reader_and_a_chain_link_can_be_a_frame(tm
     s = load_model_file(write(tmp_path, good, "good.toml"))
     assert s.model.frames["forearm"].link_index == s.model.index("elbow")
     assert any("frame 'forearm' is the frame of link 'forearm'" in n for n in s.notes)
+
+
+def test_engine_steps_and_engine_tolerances_reach_the_scenario(tmp_path):
+    from crosscheck.convergence import RefinementBudget
+    from crosscheck.engine_steps import engine_first_step
+    text = crane_text(extra=(
+        '[[engine_step]]\nengine = "exudyn"\ndt = 2.5e-4\nmax_halvings = 2\n'
+        'reason = "start transient"\n'
+        '[[tolerance]]\ncheck = "drake/free run q1"\nabs = 1e-9\nrel = 0.0\n'
+        'reason = "measured"\n'))
+    s = load_model_file(write(tmp_path, text))
+    assert s.tolerance("drake", "free run q1").abs == 1e-9
+    dt, note, budget = engine_first_step(s, "exudyn", 1e-3, RefinementBudget(4, 60.0))
+    assert dt == 2.5e-4 and "start transient" in note and budget.max_halvings == 2
+    assert budget.max_run_wall_s == 60.0
+    dt, note, budget = engine_first_step(s, "drake", 1e-3, RefinementBudget(4, 60.0))
+    assert (dt, note, budget.max_halvings) == (1e-3, "", 4)
