@@ -46,6 +46,7 @@ from typing import Callable, Optional, Sequence
 from crosscheck.compare import FAIL, PASS
 from gpme.budget import MAX_STEP_HALVINGS, BudgetError, step_search_problem
 from gpme_core.run_cost import format_seconds
+from gpme_core.stability import round_down
 
 # RK4's global order: in its asymptotic regime each halving divides the error by 2^4
 ORDER = 4
@@ -218,7 +219,7 @@ def run_accurately(run: Callable, checks: Callable, estimate: Optional[Callable]
             break
         if chosen is None:
             return StepChoice(df, rows, tuple(trials), Outcome.OUT_OF_BUDGET,
-                              _budget_note(trials, h0, wanted, why_not, estimate))
+                              _budget_note(trials, start, wanted, why_not, estimate))
         dt = h0 / 2 ** (last.halvings + chosen)
         say(f"RK4 step {_fmt(last.dt)}: {worst.describe()}, {worst.ratio:.3g}x its "
             f"tolerance; running at dt = {_fmt(dt)} ({chosen} halving{'s' * (chosen > 1)}: "
@@ -228,7 +229,7 @@ def run_accurately(run: Callable, checks: Callable, estimate: Optional[Callable]
             new_df = run(dt)
         except BudgetError as exc:   # its own estimate came out above the limits
             return StepChoice(df, rows, tuple(trials), Outcome.OUT_OF_BUDGET,
-                              _budget_note(trials, h0, wanted, str(exc), estimate))
+                              _budget_note(trials, start, wanted, str(exc), estimate))
         df, rows = new_df, checks(new_df)
         trials.append(Trial(float(df.attrs["dt"]), last.halvings + chosen,
                             gated_errors(rows), float(df.attrs.get("wall_time_s", 0.0))))
@@ -257,16 +258,18 @@ def _kept_note(trials, start):
             f"closest {worst.quantity} at {worst.ratio:.2g} of it")
 
 
-def _budget_note(trials, h0, wanted, why_not, estimate):
+def _budget_note(trials, start, wanted, why_not, estimate):
     last = trials[-1]
     worst = last.worst
-    target = last.dt / 2 ** wanted
+    target = round_down(last.dt / 2 ** wanted)
     cost = ""
     if estimate is not None:
         wall = estimate(target).wall_s
         cost = "" if wall is None else f", estimated at {format_seconds(wall)},"
-    return (f"budget reached at RK4 step {_fmt(last.dt)} ({last.halvings} halving"
-            f"{'s' * (last.halvings != 1)} of {_fmt(h0)}): {worst.describe()}, "
+    how = start if last.halvings == 0 else (f"{last.halvings} halving"
+                                            f"{'s' * (last.halvings > 1)} of {start} "
+                                            f"{_fmt(trials[0].dt)}")
+    return (f"budget reached at RK4 step {_fmt(last.dt)} ({how}): {worst.describe()}, "
             f"{worst.ratio:.3g}x its tolerance; dt = {target:.2g} s is predicted to pass"
             f"{cost} but {why_not}; give --dt {target:.2g} (and --force above the limits) "
             "to run it. The checks judge this run")

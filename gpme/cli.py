@@ -7,6 +7,7 @@ Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on s
 import argparse
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -181,10 +182,10 @@ def _simulate_paper(args):
             return paper.run_case(case, dt=dt, estimate_only=True, **settings)
 
         print(f"simulating {label}, t_end = {t_end:g} s ...", flush=True)
+        start = "the paper's step" if n <= paper.DEFAULT_N_RFE else "half the stability limit"
         runs[case], case_rows = _run_checked(
-            label, run, lambda df, scenario=scenario: simulate_rows(scenario, df), estimate,
-            accurate=method == "RK4" and args.dt is None, force=args.force,
-            start="the paper's step")
+            label, run, partial(simulate_rows, scenario), estimate,
+            accurate=method == "RK4" and args.dt is None, force=args.force, start=start)
         rows += case_rows
     return paper.write_outputs(runs, args.out), rows
 
@@ -212,7 +213,7 @@ def _simulate_models(args):
 
         method = args.method or scenario.integrator
         df, model_rows = _run_checked(
-            scenario.name, run, lambda df, scenario=scenario: simulate_rows(scenario, df), estimate,
+            scenario.name, run, partial(simulate_rows, scenario), estimate,
             accurate=method == "RK4" and args.dt is None, force=args.force,
             start="the model's step")
         rows += model_rows
