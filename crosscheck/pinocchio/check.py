@@ -406,8 +406,8 @@ def compare_state(case: ModelCase, state: State) -> list:
     pin.updateFramePlacements(pm, data)
     names = [lk.name for lk in model.links] + list(model.frames)
     fids = list(ps.link_frames) + [ps.frames[f] for f in model.frames]
-    gpme_poses = np.concatenate([kin.T, [kin.T[f.link_index] @ f.transform
-                                         for f in model.frames.values()]])
+    frame_poses = [kin.T[f.link_index] @ f.transform for f in model.frames.values()]
+    gpme_poses = np.concatenate([kin.T, np.reshape(frame_poses, (-1, 4, 4))])
     pin_poses = np.array([data.oMf[i].homogeneous for i in fids])
     xyz = ["x", "y", "z"]
     add("pose position", gpme_poses[:, :3, 3], pin_poses[:, :3, 3], (names, xyz))
