@@ -1,6 +1,6 @@
 """Plant each fault of faults.catalogue in a copy of the sources and run `gpme verify --quick`.
 
-    python -m faults.run [--only ID ...] [--out DIR] [--work DIR] [--exclude GLOB ...]
+    python -m faults.run [--only ID ...] [--out DIR] [--work DIR] [--exclude [STEP:]GLOB ...]
                          [--resume] [--list] [--timeout S] [--keep-work]
 
 1. **Snapshot.**  The repository's Python packages (gpme, gpme_core, gpme_io, gpme_examples,
@@ -19,8 +19,10 @@
 3. **Baseline.**  The unpatched snapshot is probed twice (the runs must repeat bit for
    bit: any change a fault makes is then its own) and put through every verify
    invocation below.  If any invocation fails on the clean code, the failing checks are
-   printed and nothing is scored (a false failure would count as a catch); ``--exclude``
-   leaves out a model file by glob, and the results say so.
+   printed and nothing is scored (a false failure would count as a catch).  ``--exclude
+   GLOB`` leaves a model file out of every step, ``--exclude STEP:GLOB`` out of one verify
+   step only (the baseline is then run without it too); the results list what was left
+   out.
 4. **Each fault.**  Copy the snapshot, plant the fault (faults.catalogue.apply), run the
    probe: the crane's compiled runs first, the model files' too when the crane's did not
    change.  A fault is *reached* when a compiled run's integrated state changed.  Then
@@ -141,20 +143,34 @@ def source_hash(root: Path) -> str:
     return digest.hexdigest()
 
 
-def model_files(root: Path, exclude: Sequence[str] = ()) -> tuple:
-    """models/*.toml and examples/**/*.toml under ``root`` (relative paths, sorted), without
-    those matching a glob of ``exclude``."""
+def model_files(root: Path) -> tuple:
+    """models/*.toml and examples/**/*.toml under ``root`` (relative paths, sorted)."""
     found = sorted(p.relative_to(root).as_posix() for p in (root / "models").glob("*.toml"))
     found += sorted(p.relative_to(root).as_posix() for p in (root / "examples").glob("**/*.toml"))
-    return tuple(f for f in found if not any(fnmatch.fnmatch(f, g) for g in exclude))
+    return tuple(found)
 
 
-def invocations(models: Sequence[str]) -> tuple:
+def excluded(step: str, model: str, exclude: Sequence[str]) -> bool:
+    """Whether ``model`` is left out of ``step``'s invocation: an entry of ``exclude`` is
+    GLOB (every step) or STEP:GLOB (that verify step only)."""
+    for entry in exclude:
+        only, sep, pattern = entry.partition(":")
+        if not sep:
+            only, pattern = None, entry
+        if (only is None or only == step) and fnmatch.fnmatch(model, pattern):
+            return True
+    return False
+
+
+def invocations(models: Sequence[str], exclude: Sequence[str] = ()) -> tuple:
+    """The verify invocations, cheapest first (STEPS_CHEAP_FIRST); a "models" invocation
+    takes every model file not excluded from its step, and is dropped when none is left."""
     out = []
     for group, step in STEPS_CHEAP_FIRST:
-        if group == "models" and not models:
+        chosen = tuple(m for m in models if not excluded(step, m, exclude))
+        if group == "models" and not chosen:
             continue
-        out.append(Invocation(group, step, tuple(models) if group == "models" else ()))
+        out.append(Invocation(group, step, chosen if group == "models" else ()))
     return tuple(out)
 
 
@@ -330,10 +346,11 @@ def score_fault(fault, snapshot, work, python, invs, base, base_record, noise, t
 
 
 def invs_models(invs):
+    """Every model file some invocation runs (the probe's), in order."""
+    out = []
     for inv in invs:
-        if inv.models:
-            return inv.models
-    return ()
+        out += [m for m in inv.models if m not in out]
+    return tuple(out)
 
 
 def baseline(snapshot, work, python, invs, timeout):
@@ -419,8 +436,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="copies and reports (default: a new directory under /tmp)")
     parser.add_argument("--venv", type=Path, default=ROOT / ".venv",
                         help="the virtualenv whose python runs verify (default .venv)")
-    parser.add_argument("--exclude", nargs="+", default=[], metavar="GLOB",
-                        help="model files left out (recorded in the results)")
+    parser.add_argument("--exclude", nargs="+", default=[], metavar="[STEP:]GLOB",
+                        help="model files left out of every verify step, or of STEP only "
+                             "(e.g. exudyn:examples/my_arm/*); recorded in the results")
     parser.add_argument("--timeout", type=float, default=VERIFY_TIMEOUT_S,
                         help="s, one verify invocation (a timeout is not a catch)")
     parser.add_argument("--resume", action="store_true",
@@ -455,22 +473,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"error: faults whose anchors do not match the sources:\n{exc}", file=sys.stderr)
         return 2
     digest = source_hash(snapshot)
-    models = model_files(snapshot, args.exclude)
-    excluded = sorted(set(model_files(snapshot)) - set(models))
-    invs = invocations(models)
+    models = model_files(snapshot)
+    invs = invocations(models, args.exclude)
+    left_out = [f"{inv.step}: {m}" for inv in invocations(models) if inv.models
+                for m in inv.models if excluded(inv.step, m, args.exclude)]
     _say(f"snapshot {snapshot} (sources {digest[:12]}); model files: {list(models)}"
-         + (f"; excluded: {excluded}" if excluded else ""))
+         + (f"; left out: {left_out}" if left_out else ""))
     previous = {}
     if args.resume and (args.out / "results.json").is_file():
         previous = json.loads((args.out / "results.json").read_text(encoding="utf-8"))
-    results = {"sources": digest, "models": list(models), "excluded": excluded,
+    results = {"sources": digest, "models": list(models), "excluded": left_out,
+               "exclude_args": list(args.exclude),
                "invocations": [i.name for i in invs], "work": str(work),
                "faults": {}}
-    if previous.get("sources") == digest and previous.get("models") == list(models):
+    same = (previous.get("sources") == digest and previous.get("models") == list(models)
+            and previous.get("exclude_args") == list(args.exclude))
+    if same:
         results["faults"] = previous.get("faults", {})
     base_npz = work / "baseline" / "probe.npz"
-    reuse = (previous.get("sources") == digest and previous.get("baseline", {}).get("clean")
-             and base_npz.is_file())
+    reuse = same and previous.get("baseline", {}).get("clean") and base_npz.is_file()
     if reuse:
         _say("baseline: reused from the previous run (same sources)")
         results["baseline"] = previous["baseline"]
@@ -491,7 +512,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 print(f"  {r['invocation']}: {r['status']} (exit {r['exit']}); checks "
                       f"{[c['check'] for c in r['failed']]}; crashed {r['crashed']}",
                       file=sys.stderr)
-        print("(leave a model out with --exclude GLOB, or fix the gates first)",
+        print("(leave a model out with --exclude GLOB, or out of one step with --exclude "
+              "STEP:GLOB, or fix the gates first)",
               file=sys.stderr)
         return 1
     for k, fault in enumerate(chosen, 1):

@@ -80,3 +80,12 @@ def test_examples_exclude_the_zoo_and_start_with_the_cheap_checks():
     invs = invocations(models)
     assert (invs[0].group, invs[0].step) == ("crane", "pinocchio")
     assert all(inv.models == models for inv in invs if inv.group == "models")
+
+
+def test_a_model_is_left_out_of_one_step_or_of_all():
+    models = ("models/a.toml", "examples/b/b.toml")
+    by_step = {inv.step: inv.models for inv in invocations(models, ["exudyn:examples/b/*"])
+               if inv.group == "models"}
+    assert by_step["exudyn"] == ("models/a.toml",) and by_step["drake"] == models
+    left = invocations(models, ["models/*", "examples/*/*.toml"])
+    assert all(inv.group == "crane" for inv in left)
