@@ -2,8 +2,8 @@
 (gpme/accurate_step.py, docs/runs.md), and the command exits 1 with a one-line summary when
 a check fails.
 
-The model: examples/my_arm/my_arm.urdf without constraints, its elbow on an undamped stiff
-spring (3e5 N m/rad) and its yaw driven by a sine torque.  Half the RK4 stability limit of
+The model: examples/my_arm/my_arm.urdf without constraints, its elbow on a stiff, nearly
+undamped spring (3e5 N m/rad, 0.01 N m s/rad) and its yaw driven by a sine torque.  Half the RK4 stability limit of
 the elbow mode (the scenario's step, below output_dt) keeps the run stable but damps the
 mode's oscillation: the energy balance fails there (measured 4.5x its tolerance), and two
 halvings pass it (measured 0.07 of it).  Each run takes ~0.1 s; the file ~15 s on two cores.
