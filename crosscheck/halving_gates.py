@@ -56,6 +56,8 @@ class HalvedRuns:
     solver_floor: {column: error the engine's nonlinear solver tolerance allows, in the
                   column's unit}; missing columns have 0
     refinement  : crosscheck.convergence.Refinement, how dt was reached (None: not refined)
+    judged      : the columns whose convergence decides the order row (None: all compared);
+                  e.g. Exudyn's q and q_dot, not its index-3 multipliers
     """
 
     engine: str
@@ -65,6 +67,7 @@ class HalvedRuns:
     dt: float
     solver_floor: Mapping[str, float] = field(default_factory=dict)
     refinement: Optional[Refinement] = None
+    judged: Optional[tuple] = None
 
     def __post_init__(self):
         if len(self.runs) != HALVINGS:
@@ -185,6 +188,8 @@ def from_refined(refined: RefinedRuns) -> HalvedRuns:
 def runs_convergence(runs: HalvedRuns, columns: Sequence[str], model) -> Convergence:
     """crosscheck.convergence.Convergence of one engine's three runs, the finest compared,
     with this engine's floors (:meth:`HalvedRuns.floor`)."""
+    if runs.judged is not None:
+        columns = [c for c in columns if c in runs.judged]
     floors = {c: runs.floor(c, model) for c in columns}
     return convergence(runs.runs, columns, floors, runs.order, FINEST)
 
