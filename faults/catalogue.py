@@ -18,6 +18,11 @@ sits on the numpy reference path only.
 Sizes are relative (a factor 1.001 is 1e-3) unless the fault is an offset; every fault is
 at most 1e-3 of the term it changes: subtle, far above round-off (1e-16) and the engines'
 integration errors, far below what a look at a plot would show.
+
+:data:`CONTROLS` are not faults: each changes a number of the crane's *description* by the
+same 1e-3 (a stiffer steel, a denser one), a different but correct model that every engine
+is given alike.  verify should pass them.  A check that fails under a control fails on a
+correct model; a fault "caught" only by such checks has not been shown to be wrong.
 """
 from dataclasses import dataclass
 from pathlib import Path
@@ -271,7 +276,31 @@ CATALOGUE = (
           "a rigid element's moment of inertia about the beam axis is 1.001 x too large"),
 )
 
-BY_ID = MappingProxyType({f.id: f for f in CATALOGUE})
+CRANE = "gpme_examples/crane.py"
+CONTROL = "control: a correct model 1e-3 away"
+CONTROLS = (
+    Fault("control-steel-E", CONTROL, CRANE,
+          "steel_youngs_modulus: float = 210e9 ",
+          "steel_youngs_modulus: float = 210.21e9 ", 1e-3,
+          "the crane arm's Young's modulus is 1.001 x larger (bending springs and "
+          "dampers' counterpart of rfem-bending-*)"),
+    Fault("control-steel-G", CONTROL, CRANE,
+          "steel_shear_modulus: float = 81e9 ",
+          "steel_shear_modulus: float = 81.081e9 ", 1e-3,
+          "the crane arm's shear modulus is 1.001 x larger (counterpart of rfem-torsion)"),
+    Fault("control-arm-viscosity", CONTROL, CRANE,
+          "arm_viscosity: float = 5e6 ",
+          "arm_viscosity: float = 5.005e6 ", 1e-3,
+          "the crane arm's material viscosity is 1.001 x larger (counterpart of the RFEM "
+          "dampers)"),
+    Fault("control-steel-density", CONTROL, CRANE,
+          "steel_density: float = 7850.0 ",
+          "steel_density: float = 7857.85 ", 1e-3,
+          "the crane arm's density is 1.001 x larger (counterpart of the RFEM mass split "
+          "and element inertia)"),
+)
+
+BY_ID = MappingProxyType({f.id: f for f in CATALOGUE + CONTROLS})
 
 
 def anchor_problem(fault: Fault, root: Path):

@@ -41,7 +41,10 @@ Results (WORK holds the copies and reports, removed per fault unless --keep-work
 OUT/results.json (baseline, and per fault: outcome, the catching invocation, its failed
 checks with error/tolerance, the probe's changes, wall times) and OUT/results.md (the
 tables of docs/mutation.md).  ``--resume`` keeps the faults already in OUT/results.json
-and reuses its baseline when the snapshot's sources are the same.
+and the snapshot under WORK, and reuses its baseline (give the same --work).
+``--controls`` also runs faults.catalogue.CONTROLS (correct models 1e-3 away; every
+invocation, not only to the first failure): a check failing there fails on a correct
+model, and results.md marks the faults caught by such checks only.
 """
 import argparse
 import fnmatch
@@ -59,7 +62,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .catalogue import BY_ID, CATALOGUE, AnchorError, apply, check_anchors
+from .catalogue import BY_ID, CATALOGUE, CONTROLS, AnchorError, apply, check_anchors
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("gpme", "gpme_core", "gpme_io", "gpme_examples", "gpme_study", "crosscheck",
@@ -291,8 +294,9 @@ def _text(v):
 
 # ---------------------------------------------------------------- one fault, baseline
 def score_fault(fault, snapshot, work, python, invs, base, base_record, noise, timeout,
-                keep):
-    """The record of one fault (see the module docstring)."""
+                keep, control=False):
+    """The record of one fault (see the module docstring); a control runs every invocation
+    (its failures are the checks that fail on a correct model)."""
     start = time.perf_counter()
     fdir = work / fault.id
     if fdir.exists():
@@ -326,11 +330,16 @@ def score_fault(fault, snapshot, work, python, invs, base, base_record, noise, t
         _say(f"    {inv.name}: {res['status']} ({res['wall_s']:.0f} s"
              + (f", {len(res['failed'])} failed checks" if res["failed"] else "")
              + (f", crashed: {res['crashed']}" if res["crashed"] else "") + ")")
-        if res["status"] == FAIL:
+        if res["status"] == FAIL and not control:
             break
     record["invocations"] = results
+    record["control"] = control
     caught = [r for r in results if r["status"] == FAIL]
-    if caught:
+    if control:
+        record["outcome"] = "fails verify" if caught else (
+            "passes" if all(r["status"] == PASS for r in results) else NOT_CAUGHT_CRASH)
+        record["failed_checks"] = [c for r in caught for c in r["failed"]]
+    elif caught:
         record["outcome"] = CAUGHT
         record["caught_by"] = caught[0]["invocation"]
         record["failed_checks"] = caught[0]["failed"]
@@ -392,25 +401,54 @@ def markdown(results) -> str:
     """The tables of docs/mutation.md from a results document."""
     faults = results["faults"]
     done = [faults[f.id] for f in CATALOGUE if f.id in faults]
+    controls = [faults[f.id] for f in CONTROLS if f.id in faults]
+    fragile = {c["check"] for r in controls for c in r.get("failed_checks", [])}
     caught = [r for r in done if r["outcome"] == CAUGHT]
     lines = [f"Score: **{len(caught)} of {len(done)} faults caught** "
              f"({100.0 * len(caught) / max(len(done), 1):.0f} %).", "",
-             "| # | fault | term | file | size | reached (largest change of a compiled run) "
-             "| outcome | caught by | checks that failed (worst error/tolerance) | wall |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| # | fault | term | file | size | reached: largest change of a compiled run "
+             "(run: column) | outcome | caught by | checks that failed (error / tolerance) "
+             "| caught down to ~ | wall |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for k, r in enumerate(done, 1):
         top = max(r["probe"].items(), key=lambda kv: kv[1]["max_rel"], default=None)
         reach = (f"{top[1]['max_rel']:.1e} ({top[0]}: {top[1]['column']})"
                  if top and r["reached"] else "no")
         checks = r.get("failed_checks", [])
         shown = ", ".join(f"`{c['check']}` ({_ratio(c['error_over_tolerance'])})"
-                          for c in checks[:3])
-        if len(checks) > 3:
-            shown += f" and {len(checks) - 3} more"
+                          + (" [fails under a control too]" if c["check"] in fragile else "")
+                          for c in checks[:2])
+        if len(checks) > 2:
+            shown += f" and {len(checks) - 2} more"
         lines.append(f"| {k} | `{r['id']}` | {r['term']} | {Path(r['file']).name} | "
                      f"{r['size']:g} | {reach} | {r['outcome']} | "
-                     f"{r.get('caught_by', '-')} | {shown or '-'} | {r['wall_s'] / 60:.1f} min |")
+                     f"{r.get('caught_by', '-')} | {shown or '-'} | {_down_to(r)} | "
+                     f"{r['wall_s'] / 60:.1f} min |")
+    doubtful = [r["id"] for r in caught
+                if {c["check"] for c in r.get("failed_checks", [])} <= fragile]
+    if doubtful:
+        lines += ["", f"Caught only by checks that also fail under a control (a correct "
+                      f"model): {', '.join(f'`{d}`' for d in doubtful)}."]
+    if controls:
+        lines += ["", "Controls (a correct model 1e-3 away; verify should pass):", "",
+                  "| control | what | outcome | checks that failed (error / tolerance) | wall |",
+                  "|---|---|---|---|---|"]
+        for r in controls:
+            shown = ", ".join(f"`{c['check']}` ({_ratio(c['error_over_tolerance'])})"
+                              for c in r.get("failed_checks", [])) or "-"
+            lines.append(f"| `{r['id']}` | {r['what']} | {r['outcome']} | {shown} | "
+                         f"{r['wall_s'] / 60:.1f} min |")
     return "\n".join(lines) + "\n"
+
+
+def _down_to(record) -> str:
+    """The size at which the catching check would sit at its tolerance if the error grew
+    linearly with the fault's size: size / (largest error / tolerance); '-' if not caught."""
+    ratios = [c["error_over_tolerance"] for c in record.get("failed_checks", [])
+              if c["error_over_tolerance"]]
+    if not ratios:
+        return "-"
+    return f"{record['size'] / max(ratios):.0e}"
 
 
 def _ratio(v):
@@ -445,10 +483,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="keep the faults already in OUT/results.json")
     parser.add_argument("--keep-work", action="store_true",
                         help="keep every copy and report under WORK")
+    parser.add_argument("--controls", action="store_true",
+                        help="also run the controls (faults.catalogue.CONTROLS) after the "
+                             "faults")
     parser.add_argument("--list", action="store_true", help="print the catalogue and stop")
+    parser.add_argument("--table", action="store_true",
+                        help="rewrite OUT/results.md from OUT/results.json and stop")
     args = parser.parse_args(argv)
+    if args.table:
+        results = json.loads((args.out / "results.json").read_text(encoding="utf-8"))
+        (args.out / "results.md").write_text(markdown(results), encoding="utf-8")
+        _say(str(args.out / "results.md"))
+        return 0
     if args.list:
-        for f in CATALOGUE:
+        for f in CATALOGUE + CONTROLS:
             _say(f"{f.id:28s} {f.file:22s} {f.size:<7g} {f.term}: {f.what}")
         return 0
     unknown = [i for i in args.only or () if i not in BY_ID]
@@ -460,13 +508,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if not python.exists():
         print(f"error: no python at {python} (--venv)", file=sys.stderr)
         return 2
-    chosen = [BY_ID[i] for i in args.only] if args.only else list(CATALOGUE)
+    chosen = [BY_ID[i] for i in args.only] if args.only else (
+        list(CATALOGUE) + (list(CONTROLS) if args.controls else []))
     work = args.work or Path(tempfile.mkdtemp(prefix="gpme-faults-"))
     work.mkdir(parents=True, exist_ok=True)
     snapshot = work / "snapshot"
-    if snapshot.exists():
-        shutil.rmtree(snapshot)
-    make_snapshot(snapshot)
+    if args.resume and snapshot.is_dir():
+        _say(f"--resume: the sources of {snapshot} as they were")
+    else:
+        if snapshot.exists():
+            shutil.rmtree(snapshot)
+        make_snapshot(snapshot)
     try:
         check_anchors(chosen, snapshot)
     except AnchorError as exc:
@@ -523,7 +575,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         _say(f"[{k}/{len(chosen)}] {fault.id} ({fault.term}, {fault.file}, size {fault.size:g})")
         try:
             record = score_fault(fault, snapshot, work, python, invs, base, base_record,
-                                 noise, args.timeout, args.keep_work)
+                                 noise, args.timeout, args.keep_work,
+                                 control=fault in CONTROLS)
         except (RuntimeError, subprocess.TimeoutExpired) as exc:
             record = {"id": fault.id, "term": fault.term, "file": fault.file,
                       "size": fault.size, "outcome": NOT_CAUGHT_CRASH, "error": str(exc),
@@ -533,7 +586,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         _say(f"  -> {record['outcome']}"
              + (f" by {record['caught_by']}" if record.get("caught_by") else "")
              + f", reached: {record['reached']}, {record['wall_s'] / 60:.1f} min")
-    done = [results["faults"][f.id] for f in chosen]
+    done = [results["faults"][f.id] for f in chosen if f not in CONTROLS]
     caught = sum(r["outcome"] == CAUGHT for r in done)
     _say(f"score: {caught} of {len(done)} caught; {args.out / 'results.md'}")
     return 0

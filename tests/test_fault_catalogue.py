@@ -39,7 +39,7 @@ def test_fault_is_subtle_and_on_the_run_path(fault):
 
 
 def test_ids_are_unique():
-    ids = [f.id for f in cat.CATALOGUE]
+    ids = [f.id for f in cat.CATALOGUE + cat.CONTROLS]
     assert len(ids) == len(set(ids)) == len(cat.BY_ID)
 
 
@@ -89,3 +89,10 @@ def test_a_model_is_left_out_of_one_step_or_of_all():
     assert by_step["exudyn"] == ("models/a.toml",) and by_step["drake"] == models
     left = invocations(models, ["models/*", "examples/*/*.toml"])
     assert all(inv.group == "crane" for inv in left)
+
+
+@pytest.mark.parametrize("control", cat.CONTROLS, ids=lambda f: f.id)
+def test_controls_change_a_description_not_an_equation(control):
+    assert cat.anchor_problem(control, ROOT) is None
+    assert control.term == cat.CONTROL and not control.file.startswith("gpme_core/")
+    assert 0 < control.size <= cat.MAX_SIZE and control.id in cat.BY_ID
