@@ -131,3 +131,20 @@ def test_a_zero_crossing_of_the_error_is_not_a_failure():
 def test_local_point_refuses_an_unknown_comparison():
     with pytest.raises(ValueError, match="compared"):
         local_point("x", T, T, T, 2.0, 0.0, "middle")
+
+
+def test_a_held_constraints_floor_does_not_grow_with_the_step_count():
+    """Phi is held (Baumgarte pulls a rounding back within 1/r), not integrated: its floor
+    is the same for a run of 1e3 and of 1e6 steps once both are longer than 1/(r h)."""
+    from crosscheck.run_gates import baumgarte_memory_steps, phi_floor, phi_term_scale
+    h, rates = 1e-4, (20.0, 20.0)
+    assert baumgarte_memory_steps(h, rates) == pytest.approx(500.0)
+    assert phi_floor(0.5, 1_000, h, rates) == phi_floor(0.5, 1_000_000, h, rates)
+    assert phi_floor(0.5, 100, h, rates) < phi_floor(0.5, 1_000, h, rates)
+    # the memory is a time, 1/r = 50 ms: a finer step rounds more often within it
+    assert baumgarte_memory_steps(h / 2, rates) == pytest.approx(2 * 500.0)
+    # without Baumgarte nothing pulls Phi back: linear in the steps, as the coordinates
+    assert phi_floor(0.5, 10_000, h) > 10 * phi_floor(0.5, 1_000, h, rates)
+    # the size of Phi's terms does not vanish at a zero posture (a tool 0.3 m up at q = 0)
+    a = np.array([[0.0, 0.3, 0.45]])        # m/rad: lever arms of the joints
+    assert phi_term_scale(a, np.zeros(3))[0] == pytest.approx(0.75)
