@@ -39,6 +39,7 @@ from gpme.out_lock import exclusive_output, output_file_problem
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .engines import missing_message
+from . import rfem_reference
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
 from .reports.rows import check_name, normalise, other_rows, own_rows, write_rows
@@ -85,7 +86,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
     from gpme_io.scenario import crane_scenario
     from .run_checks import rows_frame, run_rows
     t_end = QUICK_T_END if quick else FULL_T_END
-    runs, rows = {}, []
+    runs, rows, rfem_rows = {}, [], []
     for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
         _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
              f"{paper.DEFAULT_DT[case]:g} s)")
@@ -93,8 +94,9 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
                                     max_wall_s=max_wall_s)
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
         rows += run_rows(crane_scenario(n), runs[case])
+        rfem_rows += rfem_reference.rfem_rows(crane_scenario(n))    # RFEM vs beam theory
     paper.write_outputs(runs, run_dir / "paper", compressed=True)
-    df = rows_frame(rows)
+    df = _with_rfem_rows(rows_frame(rows), rfem_rows)
     write_rows(df, run_dir, "gpme")
     return df, runs
 
@@ -104,9 +106,10 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     from gpme.accurate_step import run_accurately
     from gpme.runs import simulate_scenario, write_run_outputs
     from .run_checks import rows_frame, run_rows
-    rows = []
+    rows, rfem_rows = [], []
     for scenario in scenarios:
         _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
+        rfem_rows += rfem_reference.rfem_rows(scenario)     # RFEM vs beam theory
 
         def run(dt, scenario=scenario):
             return simulate_scenario(scenario, quick=quick, progress=progress, dt=dt,
@@ -128,9 +131,17 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
         _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
         write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
         rows += scenario_rows
-    df = rows_frame(rows)
+    df = _with_rfem_rows(rows_frame(rows), rfem_rows)
     write_rows(df, run_dir, "gpme")
     return df
+
+
+def _with_rfem_rows(df, rfem_rows):
+    """The gpme step's run rows and its rows of the RFEM discretisation against closed-form
+    beam theory (crosscheck.rfem_reference, section "rfem"), one table."""
+    if not rfem_rows:
+        return df
+    return pd.concat([df, rfem_reference.rows_frame(rfem_rows)], ignore_index=True)
 
 
 def _merge_prerequisites(staging, tables, prerequisites):

@@ -43,11 +43,16 @@ def test_run_directory_and_latest(report):
     from crosscheck.reports.rows import read_rows
     back = read_rows(run_dir, "gpme")
     assert pd.read_csv(run_dir / "paper" / "rigid.csv.gz")["t"].iloc[-1] == verify.QUICK_T_END
-    assert set(back["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
-                                     "energy balance",
-                                     "smallest singular value of the constraint Jacobian",
-                                     "peak bending angle (arm)", "peak torsion angle (arm)",
-                                     "peak bending stress (arm)"}
+    run_rows = back[back["section"] == "run"]
+    assert set(run_rows["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
+                                         "energy balance",
+                                         "smallest singular value of the constraint Jacobian",
+                                         "peak bending angle (arm)", "peak torsion angle (arm)",
+                                         "peak bending stress (arm)"}
+    # and the crane arm's RFEM discretisation against beam theory (crosscheck.rfem_reference)
+    from crosscheck.rfem_reference import QUANTITIES, SECTION
+    assert set(back.loc[back["section"] == SECTION, "quantity"]) == set(QUANTITIES)
+    assert set(back["section"]) == {"run", SECTION}
 
 
 def test_interrupted_run_leaves_previous_report_and_latest(report, monkeypatch):
