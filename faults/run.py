@@ -348,6 +348,8 @@ def score_fault(fault, snapshot, work, python, invs, base, base_record, noise, t
     else:
         record["outcome"] = MISSED
     record["wall_s"] = round(time.perf_counter() - start, 1)
+    for res in results:                 # the failed checks are kept once, in failed_checks
+        res["n_failed"] = len(res.pop("failed"))
     if not keep:
         shutil.rmtree(fdir / "src", ignore_errors=True)
         shutil.rmtree(fdir / "reports", ignore_errors=True)
