@@ -314,8 +314,8 @@ def score_fault(fault, snapshot, work, python, invs, base, base_record, noise, t
     for crane, models in ((True, ()), (False, invs_models(invs))):
         if not crane and not models:
             continue
-        arrays, _ = run_probe(python, copy, env, fdir / f"probe-{'crane' if crane else 'models'}.npz",
-                              crane, models, log)
+        npz = fdir / f"probe-{'crane' if crane else 'models'}.npz"
+        arrays, _ = run_probe(python, copy, env, npz, crane, models, log)
         changes.update(probe_changes(base, base_record, arrays))
         if any(c["max_rel"] > noise for c in changes.values()):
             break
@@ -581,7 +581,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                  control=fault in CONTROLS)
         except (RuntimeError, subprocess.TimeoutExpired) as exc:
             record = {"id": fault.id, "term": fault.term, "file": fault.file,
-                      "size": fault.size, "outcome": NOT_CAUGHT_CRASH, "error": str(exc),
+                      "size": fault.size, "what": fault.what, "control": fault in CONTROLS,
+                      "outcome": NOT_CAUGHT_CRASH, "error": str(exc),
                       "probe": {}, "reached": False, "wall_s": 0.0, "invocations": []}
         results["faults"][fault.id] = record
         _write(args.out, results)
