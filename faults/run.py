@@ -572,7 +572,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 1
     for k, fault in enumerate(chosen, 1):
         if fault.id in results["faults"]:
-            _say(f"[{k}/{len(chosen)}] {fault.id}: done before ({results['faults'][fault.id]['outcome']})")
+            outcome = results["faults"][fault.id]["outcome"]
+            _say(f"[{k}/{len(chosen)}] {fault.id}: done before ({outcome})")
             continue
         _say(f"[{k}/{len(chosen)}] {fault.id} ({fault.term}, {fault.file}, size {fault.size:g})")
         try:
