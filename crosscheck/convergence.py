@@ -44,7 +44,7 @@ finer step added) within a budget (:class:`RefinementBudget`), and when the budg
 out the outcome is "not converged", a failed check naming the engine, the time, the local
 order and the remedy: never a pass.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Mapping, Optional, Sequence
 
 import numpy as np
@@ -223,6 +223,14 @@ class Refinement:
     @property
     def halvings(self) -> int:
         return len(self.steps) - 1
+
+    def describe(self, engine: str) -> str:
+        """Report text of the halvings made ('' when none): how far, why each one."""
+        if self.halvings == 0:
+            return ""
+        return (f"; {engine}'s step halved {self.halvings}x to dt = {self.steps[-1]:.3g} s to "
+                f"reach the asymptotic regime ({self.budget.describe()}): "
+                + " | ".join(self.reasons))
 
     def remedy(self, engine: str, key: str) -> str:
         """What a user can do when the budget ran out."""

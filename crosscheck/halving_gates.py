@@ -37,7 +37,8 @@ from typing import Optional
 
 from .compare import Tolerance, compare, not_judged
 from .convergence import FINEST, Convergence, Refinement, convergence
-from .run_gates import EPS, ORDER_TOLERANCE, RESOLVED, RefinedRuns, column_unit
+from .run_gates import (EPS, ORDER_TOLERANCE, RESOLVED, RefinedRuns, column_unit,
+                        overridden_quantities)
 
 HALVINGS = 3            # runs at h, h/2, h/4
 TIME_MATCH_S = 1e-9     # s: output times of two runs are the same sample when this close
@@ -144,23 +145,6 @@ class HalvedRuns:
         cross = EPS * np.sqrt(n) * _max_abs(run, kind) if kind else 0.0
         return own + cross + float(self.solver_floor.get(column, 0.0))
 
-    def observed_order(self, columns: Sequence[str], floors: Mapping[str, float]):
-        """(p_obs, column, resolved): the smallest log2 ratio of successive differences over
-        the columns whose h/2 - h/4 difference exceeds RESOLVED floors (resolved = True);
-        when none does, the ratio of the column closest to resolved (resolved = False)."""
-        best, closest = (np.nan, None), (np.nan, None, -np.inf)
-        for c in columns:
-            d1, d2 = self.differences(c)
-            p = float(np.log2(d1 / d2)) if d1 > 0 and d2 > 0 else np.nan
-            above = d2 / floors[c] if floors[c] > 0 else np.inf
-            if np.isfinite(p) and above > closest[2]:
-                closest = (p, c, above)
-            if np.isfinite(p) and above > RESOLVED and (best[1] is None or p < best[0]):
-                best = (p, c)
-        if best[1] is not None:
-            return best[0], best[1], True
-        return closest[0], closest[1], False
-
 
 def _max_abs(run: pd.DataFrame, columns) -> float:
     """Largest |value| over ``columns`` of ``run`` (those it has)."""
@@ -228,7 +212,7 @@ def order_row(engine: str, scenario_name: str, runs: HalvedRuns, columns: Sequen
     quantity = f"{label}: observed order of {runs.engine} ({runs.scheme})"
     if owner != engine:
         quantity = f"{label} ({engine}): observed order of {runs.engine} ({runs.scheme})"
-    steps = _steps_text(runs)
+    steps = runs.refinement.describe(runs.engine) if runs.refinement is not None else ""
     if not conv.resolved:
         tol = Tolerance(np.inf, 0.0, f"information: at dt/2 every column's {runs.engine} "
                         f"step-halving difference is below {RESOLVED:g} round-off and solver "
@@ -248,14 +232,6 @@ def order_row(engine: str, scenario_name: str, runs: HalvedRuns, columns: Sequen
                     "every compared time (crosscheck.convergence)" + steps + verdict)
     value = p if np.isfinite(p) else -99.0
     return compare(owner, scenario_name, quantity, case, [value], [runs.order], tol, [where])
-
-
-def _steps_text(runs: HalvedRuns) -> str:
-    rec = runs.refinement
-    if rec is None or rec.halvings == 0:
-        return ""
-    return (f"; {runs.engine}'s step halved {rec.halvings}x to dt = {runs.dt:.3g} s to reach "
-            f"the asymptotic regime ({rec.budget.describe()}): " + " | ".join(rec.reasons))
 
 
 def run_rows(engine: str, scenario, gpme: HalvedRuns, other: HalvedRuns,
@@ -289,7 +265,6 @@ def run_rows(engine: str, scenario, gpme: HalvedRuns, other: HalvedRuns,
         because = ("the step-halving error estimate that gates it is not the error: see "
                    + "; ".join(f"the {r['engine']} check '{r['quantity']}' ({r['entry']})"
                                for r in failed))
-        overridden = {k.split("/", 1)[1] for k in getattr(scenario, "tolerances", {})
-                      if k.startswith(f"{engine}/")}
+        overridden = overridden_quantities(scenario, engine)
         rows = [r if r["quantity"] in overridden else not_judged(r, because) for r in rows]
     return rows + orders

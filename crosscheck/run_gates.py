@@ -33,7 +33,7 @@ import pandas as pd
 from gpme_core.integrate import rk4_step_plan, simulate
 
 from .compare import Tolerance, compare, not_judged
-from .convergence import (COARSEST, FINEST, ORDER_TOLERANCE, RESOLVED, Convergence,
+from .convergence import (COARSEST, ORDER_TOLERANCE, RESOLVED, Convergence,
                           Refinement, RefinementBudget, convergence, refine)
 
 EPS = float(np.finfo(float).eps)
@@ -240,20 +240,10 @@ def observed_order(refined: RefinedRuns, columns: Sequence[str],
     """(p, column, resolved) of the least resolved ratio: p = log2(max|x_h - x_h/2| /
     max|x_h/2 - x_h/4|) minimised over the columns whose h/2 - h/4 difference exceeds
     RESOLVED round-off floors (resolved = True); when no column does, the p of the column
-    closest to being resolved, with resolved = False (truncation error below round-off)."""
-    resolved, closest = (np.nan, None), (np.nan, None, -np.inf)
-    for c in columns:
-        x1, x2, x4 = (r[c].to_numpy(float) for r in refined.runs)
-        d1, d2 = float(np.abs(x1 - x2).max()), float(np.abs(x2 - x4).max())
-        p = float(np.log2(d1 / d2)) if d1 > 0 and d2 > 0 else np.nan
-        above = d2 / floors[c] if floors[c] > 0 else np.inf
-        if above > closest[2] and np.isfinite(p):
-            closest = (p, c, above)
-        if above > RESOLVED and (np.isnan(resolved[0]) or p < resolved[0]):
-            resolved = (p, c)
-    if resolved[1] is not None:
-        return resolved[0], resolved[1], True
-    return closest[0], closest[1], False
+    closest to being resolved, with resolved = False (truncation error below round-off).
+    The run-wide part of crosscheck.convergence.convergence."""
+    conv = convergence(refined.runs, columns, floors, ORDER, COARSEST)
+    return conv.order, conv.column, conv.resolved
 
 
 def column_unit(model, column: str) -> str:
@@ -326,14 +316,15 @@ def run_rows(engine: str, scenario, refined: RefinedRuns, engine_df: pd.DataFram
         because = (f"gpme's own RK4 runs of this case are not in their asymptotic regime, so "
                    f"the gate (gpme's Richardson error) is not its error: see the gpme check "
                    f"'{order['quantity']}' ({order['entry']})")
-        rows = [not_judged(r, because) if r["quantity"] not in _overridden(scenario, engine)
-                else r for r in rows]
+        overridden = overridden_quantities(scenario, engine)
+        rows = [r if r["quantity"] in overridden else not_judged(r, because) for r in rows]
     rows.append(order)
     return rows
 
 
-def _overridden(scenario, engine):
-    """Quantities whose tolerance the model file sets (judged whatever gpme's order)."""
+def overridden_quantities(scenario, engine) -> set:
+    """Quantities of ``engine`` whose tolerance the model file sets (judged whatever the
+    runs' convergence: the file takes responsibility, with its reason)."""
     prefix = f"{engine}/"
     return {k[len(prefix):] for k in getattr(scenario, "tolerances", {}) if k.startswith(prefix)}
 
@@ -347,7 +338,7 @@ def order_row(engine, scenario, refined, columns, floors, label, case) -> dict:
         conv = convergence(refined.runs, columns, floors, ORDER, COARSEST)
     p, where = conv.decisive_order()
     quantity = f"{label} ({engine}): observed RK4 order of gpme"
-    steps = _steps_text(refined)
+    steps = refined.refinement.describe("gpme") if refined.refinement is not None else ""
     if not conv.resolved:
         tol = Tolerance(np.inf, 0.0, "information: at dt/2 every column's truncation error is "
                         f"below {RESOLVED:g} round-off floors, so no order can be observed (shown: "
@@ -366,11 +357,3 @@ def order_row(engine, scenario, refined, columns, floors, label, case) -> dict:
                     "meaningless" + steps + verdict)
     value = p if np.isfinite(p) else -99.0
     return compare("gpme", scenario.name, quantity, case, [value], [ORDER], tol, [where])
-
-
-def _steps_text(refined) -> str:
-    rec = refined.refinement
-    if rec is None or rec.halvings == 0:
-        return ""
-    return (f"; step halved {rec.halvings}x to dt = {refined.dt:.3g} s to reach the "
-            f"asymptotic regime ({rec.budget.describe()}): " + " | ".join(rec.reasons))

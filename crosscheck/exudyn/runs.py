@@ -39,7 +39,7 @@ from gpme_core.errors import ConstraintError, SimulationError
 
 from ..convergence import FINEST, RefinementBudget, refine
 from ..engine_steps import engine_first_step
-from ..run_gates import phi_term_scale
+from ..run_gates import PHI_EVAL_ROUNDINGS, phi_floor, phi_term_scale
 from .constraints import ProgrammedConstraints
 from .model import add_tree, mass_and_forces, quiet_settings
 
@@ -228,7 +228,6 @@ def _phi_floors(df, constraint_names) -> dict:
     at every step (to Newton's tolerance, in the solver floor), and gpme's Baumgarte term
     pulls Phi back within 1/alpha (crosscheck.run_gates.phi_floor), so an older rounding
     is not carried."""
-    from ..run_gates import PHI_EVAL_ROUNDINGS
     scale = df.attrs.get("phi_scale", {})
     return {c: PHI_EVAL_ROUNDINGS * EPS * float(scale.get(c, 0.0)) for c in constraint_names}
 
@@ -239,7 +238,6 @@ def gpme_floors(scenario, columns_compared, exudyn_finest, n_steps, h) -> dict:
     the manifold but formed from terms of size phi_scale (the scale from Exudyn's run: the
     same positions up to the compared errors), with the roundings Baumgarte has not yet
     pulled back (crosscheck.run_gates.phi_floor, one engine's half)."""
-    from ..run_gates import phi_floor
     scale = exudyn_finest.attrs.get("phi_scale", {})
     baumgarte = (scenario.system.alpha, scenario.system.beta)
     cons = [c for c in scenario.system.constraint_names if c in columns_compared]
