@@ -30,6 +30,8 @@ from gpme_core.errors import ModelError, ModelFileError, SectionWarning
 from gpme_core.model import STANDARD_GRAVITY, Model
 from gpme_core.rfem import BeamProperties
 
+from .input_files import SIDE_FILE_LIMIT, InputFileError, read_input_file
+
 SIDE_SUFFIX = ".gpme.json"
 SIDE_FORMAT = "gpme-urdf-side-file"
 SIDE_VERSION = 1
@@ -72,9 +74,9 @@ def read_side_file(path) -> tuple:
     path = Path(path)
     label = f"side file {str(path)!r}"
     try:
-        data = path.read_bytes()
-    except OSError as exc:
-        return None, [f"{label}: cannot read it ({exc.strerror or exc}); nothing in it was "
+        data = read_input_file(path, "side file", SIDE_FILE_LIMIT)
+    except InputFileError as exc:
+        return None, [f"{label}: cannot read it: it {exc.reason}; nothing in it was "
                       f"checked (a side file is the JSON file <stem>{SIDE_SUFFIX} beside the "
                       "URDF)"]
     repeated = []

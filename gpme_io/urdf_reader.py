@@ -48,6 +48,7 @@ from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
                              FlexibleLinkInfo, Model, validate_model)
 from gpme_core.rfem import BeamProperties, BeamSection
 
+from .input_files import URDF_LIMIT, InputFileError, read_input_file
 from .side_file import check_side_file, drive_function, read_side_file, side_file_path
 from .urdf_writer import UNLIMITED
 
@@ -822,12 +823,10 @@ def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
     source = str(path)
     problems = []
     try:
-        data = path.read_bytes()
-    except OSError as exc:
+        data = read_input_file(path, "URDF", URDF_LIMIT)
+    except InputFileError as exc:
         data = None
-        kind = ("it is a directory, not a file" if path.is_dir() else
-                "no such file" if not path.exists() else (exc.strerror or str(exc)))
-        problems.append(f"cannot read the URDF ({kind}); a URDF is an XML file "
+        problems.append(f"cannot read the URDF: it {exc.reason}; a URDF is an XML file "
                         "<robot name=...> with <link> and <joint> elements")
     side = None
     if side_file == "auto":

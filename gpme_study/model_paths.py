@@ -34,6 +34,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping, Optional
 
+from gpme_io.input_files import MODEL_FILE_LIMIT, InputFileError, read_input_file
+
 # array-of-tables section -> the key that names an entry
 IDENTIFYING_KEYS = {"flexible": "link", "joint": "name", "drive": "joint",
                     "constraint": "name", "programme": "name"}
@@ -173,16 +175,18 @@ def read_model_document(path) -> ModelDocument:
     import tomllib
     path = Path(path).resolve()
     try:
-        text = path.read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise PathError(f"model file {str(path)!r} cannot be read ({exc.strerror or exc})") \
-            from None
+        text = read_input_file(path, "model file", MODEL_FILE_LIMIT).decode("utf-8")
+    except InputFileError as exc:
+        raise PathError(f"model file {str(path)!r} cannot be read: it {exc.reason}") from None
     except UnicodeDecodeError as exc:
         raise PathError(f"model file {str(path)!r} is not UTF-8 text ({exc})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise PathError(f"model file {str(path)!r} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise PathError(f"model file {str(path)!r}: its arrays or tables are nested too "
+                        "deeply to read") from None
     return _document(path, data)
 
 

@@ -16,6 +16,7 @@ from typing import Mapping, Optional
 import numpy as np
 
 from gpme_core.errors import ModelError, ModelFileError
+from gpme_io.input_files import SIDE_FILE_LIMIT, URDF_LIMIT, InputFileError, read_input_file
 
 from . import model_metrics as mm
 from .model_paths import ModelDocument
@@ -57,10 +58,11 @@ def file_digests(document: ModelDocument, data: Optional[Mapping] = None) -> dic
             pass
     if isinstance(model.get("side_file"), str):
         paths["side_file"] = document.path.parent / model["side_file"]
+    limits = {"urdf": ("URDF", URDF_LIMIT), "side_file": ("side file", SIDE_FILE_LIMIT)}
     for key, p in paths.items():
         try:
-            out[key] = hashlib.sha256(p.read_bytes()).hexdigest()
-        except OSError:
+            out[key] = hashlib.sha256(read_input_file(p, *limits[key])).hexdigest()
+        except InputFileError:
             pass
     return out
 

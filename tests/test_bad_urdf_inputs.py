@@ -298,10 +298,10 @@ def test_problems_of_every_stage_come_in_one_error(tmp_path, urdf, side_doc, wor
 
 def test_missing_file_and_directory_are_named(tmp_path):
     msg = str(problems_of(tmp_path / "nowhere.urdf"))
-    assert "nowhere.urdf: cannot read the URDF (no such file)" in msg
+    assert "nowhere.urdf: cannot read the URDF: it does not exist" in msg
     assert "<robot name=...>" in msg
     msg = str(problems_of(tmp_path))
-    assert "cannot read the URDF (it is a directory, not a file)" in msg
+    assert "cannot read the URDF: it is a directory, not a regular file" in msg
     side_dir = tmp_path / "side"
     side_dir.mkdir()
     path = write_case(tmp_path, ARM_TEXT, None)

@@ -20,6 +20,8 @@ import numpy as np
 from gpme_core import time_functions as tfn
 from gpme_core.errors import ConstraintError, ModelError
 from gpme_examples.crane import CraneParameters
+from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, URDF_LIMIT,
+                                 InputFileError, check_input_file, read_input_file)
 from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
 
 from . import expressions as ex
@@ -231,13 +233,16 @@ def parse_model_file(path) -> tuple:
     frames and links are checked when the model is built)."""
     path = Path(path)
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        return ModelFile(path, None), [f"cannot read the model file ({exc.strerror or exc})"]
+        raw = read_input_file(path, "model file", MODEL_FILE_LIMIT)
+    except InputFileError as exc:
+        return ModelFile(path, None), [f"cannot read the model file: it {exc.reason}"]
     try:
         data = tomllib.loads(raw.decode("utf-8"))
     except UnicodeDecodeError as exc:
         return ModelFile(path, None), [f"not UTF-8 text ({exc})"]
+    except RecursionError:
+        return ModelFile(path, None), ["not read as TOML: its arrays or tables are nested too "
+                                       "deeply (a model file needs a few levels)"]
     except tomllib.TOMLDecodeError as exc:
         hint = ""
         if raw.lstrip().startswith(b"<") or path.suffix.lower() in (".urdf", ".xml", ".xacro"):
@@ -349,10 +354,16 @@ def _urdf_source(c: _Checker, t: dict, path: Path) -> Optional[UrdfSource]:
     side_written = c.string(t, "side_file", "model", "path of a gpme side file", required=False)
     if side_written is not None:
         side = (path.parent / side_written).resolve()
-        if not side.is_file():
+        if not side.exists():
             c.add("model.side_file", f"no file at {str(side)!r} (paths are relative to the "
                   f"model file's folder {str(path.parent)!r})")
             side = None
+        else:
+            try:
+                check_input_file(side, "side file", SIDE_FILE_LIMIT)
+            except InputFileError as exc:
+                c.add("model.side_file", str(exc))
+                side = None
     return None if resolved is None else UrdfSource(resolved, written, side)
 
 
@@ -383,10 +394,16 @@ def resolve_urdf(written: str, model_file: Path, c: Optional[_Checker] = None) -
     else:
         p = Path(written)
         out = (p if p.is_absolute() else model_file.parent / p).resolve()
-        if not out.is_file():
+        if not out.exists():
             problems.append(f"no file at {str(out)!r} (paths are relative to the model file's "
                             f"folder {str(model_file.parent.resolve())!r})")
             out = None
+        else:
+            try:
+                check_input_file(out, "URDF", URDF_LIMIT)
+            except InputFileError as exc:
+                problems.append(str(exc))
+                out = None
     if out is not None and not out.is_file():
         problems.append(f"{str(out)!r} is listed by {ROBOT_DATA_DISTRIBUTION} but missing; "
                         f"reinstall it: {ROBOTS_EXTRA_HINT}")
