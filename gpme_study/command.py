@@ -9,6 +9,8 @@ import os
 import re
 import sys
 
+from gpme_core.echo import shown
+
 RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
              "output_dt": "output_dt", "dt": "dt", "min_frequency": "min_frequency_hz",
              "phi_tolerance": "phi_tolerance"}
@@ -80,7 +82,7 @@ def _pairs(items, flag, problems):
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
-            problems.append(f"{flag} {item!r}: expected NAME=VALUE")
+            problems.append(f"{flag} {shown(item)}: expected NAME=VALUE")
             continue
         out[name.strip()] = value.strip()
     return out

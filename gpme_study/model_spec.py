@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
+from gpme_core.echo import shown
+
 from .model_paths import PathError, read_model_document
 from .spec import (MAX_N_RFE, MODES, SweepSpec, SweepSpecError, _grid_points,
                    _grid_values, _lhs_points, _limits, _list_points, _number, _plot_axes,
@@ -120,12 +122,12 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
     problems = []
     for key in data:
         if key not in MODEL_TOP_KEYS:
-            problems.append(f"unknown key {key!r}; valid keys with a model file: "
+            problems.append(f"unknown key {shown(key)}; valid keys with a model file: "
                             f"{list(MODEL_TOP_KEYS)}")
     written = data.get("model")
     document = None
     if not isinstance(written, str) or not written.strip():
-        problems.append(f"model must be the path of a model file (.toml), got {written!r}")
+        problems.append(f"model must be the path of a model file (.toml), got {shown(written)}")
     else:
         path = Path(written).expanduser()
         if not path.is_absolute():
@@ -139,11 +141,11 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
     space = ModelSpace(document)
     mode = data.get("mode", "grid")
     if mode not in MODES:
-        problems.append(f"mode must be one of {MODES}, got {mode!r}")
+        problems.append(f"mode must be one of {MODES}, got {shown(mode)}")
     run = _model_run_settings(data.get("run") or {}, problems)
     parameters = data.get("parameters") or {}
     if not isinstance(parameters, dict):
-        problems.append(f"parameters must be a table path = values, got {parameters!r}")
+        problems.append(f"parameters must be a table path = values, got {shown(parameters)}")
         parameters = {}
     points = []
     if mode == "grid":
@@ -157,7 +159,8 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
             problems.append("mode 'list' takes its points from 'points', not 'parameters'")
     for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
         if key in data and mode != wanted:
-            problems.append(f"{key!r} is only used with mode {wanted!r} (mode is {mode!r})")
+            problems.append(f"{shown(key)} is only used with mode {wanted!r} (mode is "
+                            f"{shown(mode)})")
     fill_defaults(points, space)
     swept = _swept(points)
     for key in ("t_end", "dt", "output_dt"):
@@ -180,7 +183,7 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
 
 def _model_run_settings(run, problems) -> ModelRunSettings:
     if not isinstance(run, dict):
-        problems.append(f"run must be a table of settings, got {run!r}")
+        problems.append(f"run must be a table of settings, got {shown(run)}")
         return ModelRunSettings()
     values = {}
     for key, value in run.items():
@@ -190,7 +193,7 @@ def _model_run_settings(run, problems) -> ModelRunSettings:
             continue
         if key == "on_constraints":
             if not isinstance(value, bool):
-                problems.append(f"run.on_constraints must be true or false, got {value!r}")
+                problems.append(f"run.on_constraints must be true or false, got {shown(value)}")
             else:
                 values[key] = value
             continue
@@ -198,13 +201,13 @@ def _model_run_settings(run, problems) -> ModelRunSettings:
             x = _number(value)
         except (ValueError, TypeError):
             problems.append(f"run.{key}: expected a number ({MODEL_RUN_KEYS[key]}), got "
-                            f"{value!r}")
+                            f"{shown(value)}")
             continue
         rule_ok = math.isfinite(x) and (x >= 0 if key == "transient" else x > 0)
         if not rule_ok:
             rel = ">= 0" if key == "transient" else "> 0"
             problems.append(f"run.{key} must be finite and {rel} ({MODEL_RUN_KEYS[key]}), "
-                            f"got {value!r}")
+                            f"got {shown(value)}")
             continue
         values[key] = x
     t_end, tr = values.get("t_end"), values.get("transient")
@@ -269,7 +272,7 @@ def _value_problems(document, values, run, problems):
             of_the_file.update(found)
             problems += [f"the model file with the sweep's [run]: {p}" for p in found]
             continue
-        where = ", ".join(f"parameters.{k} = {v!r}" for k, v in single.items())
+        where = ", ".join(f"parameters.{k} = {shown(v)}" for k, v in single.items())
         problems += [f"{where}: {p}" for p in found if p not in of_the_file]
 
 

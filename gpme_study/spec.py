@@ -44,8 +44,12 @@ from pathlib import Path
 
 import numpy as np
 
-from gpme_examples.crane import CraneParameters
+from gpme_core.echo import ECHO_LIMIT, shown, shown_text
 from gpme_core.errors import ModelError
+from gpme_examples.crane import CraneParameters
+from gpme_io.input_files import SWEEP_FILE_LIMIT, InputFileError, read_input_file
+
+from .bounded_yaml import load_yaml
 
 from .metrics import METRICS
 
@@ -87,14 +91,28 @@ MAX_POINTS = 100_000
 MAX_N_RFE = 100
 
 
+# problems of one sweep description the message lists (all are in .problems), and the
+# characters of each: a hostile file (thousands of unknown keys, a megabyte key) must not
+# print megabytes; the first ones are what a user fixes first anyway.
+MAX_LISTED_PROBLEMS = 50
+MAX_PROBLEM_CHARS = 4000
+
+
 class SweepSpecError(ModelError):
-    """A sweep description is invalid; the message lists every problem found."""
+    """A sweep description is invalid; the message lists every problem found (the first
+    MAX_LISTED_PROBLEMS, each cut at MAX_PROBLEM_CHARS characters; .problems has all)."""
 
     def __init__(self, problems):
         super().__init__(problems)
+        listed = [shown_text(p, MAX_PROBLEM_CHARS) for p in self.problems[:MAX_LISTED_PROBLEMS]]
+        more = len(self.problems) - len(listed)
+        if more:
+            listed.append(f"... and {more} more problems (fix the ones above first)")
         if len(self.problems) > 1:
             self.args = (f"{len(self.problems)} problems in the sweep description:\n"
-                         + "\n".join(f"  - {p}" for p in self.problems),)
+                         + "\n".join(f"  - {p}" for p in listed),)
+        else:
+            self.args = (listed[0],)
 
 
 @dataclass(frozen=True)
@@ -165,24 +183,29 @@ def load_spec(path):
 def read_spec_file(path):
     """The raw dict of a TOML or YAML sweep file (validated later by spec_from_dict)."""
     path = Path(path)
-    if not path.is_file():
-        raise SweepSpecError(f"sweep file {str(path)!r} does not exist")
-    suffix = path.suffix.lower()
-    text = path.read_text(encoding="utf-8")
     try:
+        raw = read_input_file(path, "sweep file", SWEEP_FILE_LIMIT)
+    except InputFileError as exc:
+        raise SweepSpecError(str(exc)) from None
+    suffix = path.suffix.lower()
+    try:
+        text = raw.decode("utf-8")
         if suffix == ".toml":
             import tomllib
             data = tomllib.loads(text)
         elif suffix in (".yaml", ".yml"):
-            import yaml
-            data = yaml.safe_load(text) or {}
+            data = load_yaml(text) or {}
         else:
             raise SweepSpecError(f"sweep file {str(path)!r}: expected a .toml, .yaml or .yml "
-                                 f"file, got suffix {suffix!r}")
+                                 f"file, got suffix {shown(suffix)}")
     except SweepSpecError:
         raise
+    except RecursionError:
+        raise SweepSpecError(f"sweep file {str(path)!r} cannot be parsed: its lists or tables "
+                             "are nested too deeply") from None
     except Exception as exc:     # the parsers' own errors, with their line numbers
-        raise SweepSpecError(f"sweep file {str(path)!r} cannot be parsed: {exc}") from exc
+        raise SweepSpecError(f"sweep file {str(path)!r} cannot be parsed: "
+                             f"{shown_text(str(exc), 2 * ECHO_LIMIT)}") from None
     if not isinstance(data, dict):
         raise SweepSpecError(f"sweep file {str(path)!r}: expected a table/mapping at the top, "
                              f"got {type(data).__name__}")
@@ -192,11 +215,11 @@ def read_spec_file(path):
 def _number(value):
     """float of a number or of a string holding one; ValueError naming the value else."""
     if isinstance(value, bool) or not isinstance(value, (int, float, str, np.number)):
-        raise ValueError(f"expected a number, got {value!r}")
+        raise ValueError(f"expected a number, got {shown(value)}")
     try:
         return float(value.strip() if isinstance(value, str) else value)
     except ValueError:
-        raise ValueError(f"expected a number, got {value!r}") from None
+        raise ValueError(f"expected a number, got {shown(value)}") from None
 
 
 def _grid_values(name, value, problems):
@@ -205,24 +228,24 @@ def _grid_values(name, value, problems):
         if isinstance(value, str) and ":" in value:
             parts = value.split(":")
             if len(parts) != 3:
-                raise ValueError(f"expected 'start:stop:num', got {value!r}")
+                raise ValueError(f"expected 'start:stop:num', got {shown(value)}")
             value = {"start": parts[0], "stop": parts[1], "num": parts[2]}
         elif isinstance(value, str) and "," in value:
             value = [v for v in value.split(",") if v.strip()]
         if isinstance(value, dict):
             extra = set(value) - {"start", "stop", "num"}
             if extra or len(value) != 3:
-                raise ValueError(f"expected keys start, stop, num, got {sorted(value)}")
+                raise ValueError(f"expected keys start, stop, num, got {shown(sorted(value))}")
             num = _number(value["num"])
             if not math.isfinite(num) or num != int(num) or num < 1:
-                raise ValueError(f"num must be a positive integer, got {value['num']!r}")
+                raise ValueError(f"num must be a positive integer, got {shown(value['num'])}")
             if num > MAX_POINTS:
                 raise ValueError(f"num = {int(num)} values; at most {MAX_POINTS} (check the "
                                  "grid)")
             start, stop = _number(value["start"]), _number(value["stop"])
             for key, v in (("start", start), ("stop", stop)):
                 if not math.isfinite(v):
-                    raise ValueError(f"{key} must be a finite number, got {value[key]!r}")
+                    raise ValueError(f"{key} must be a finite number, got {shown(value[key])}")
             return [float(v) for v in np.linspace(start, stop, int(num))]
         if isinstance(value, (list, tuple)):
             if not value:
@@ -241,10 +264,10 @@ def _range(name, value, problems):
             value = value.split(":")
         if isinstance(value, dict):
             if set(value) != {"low", "high"}:
-                raise ValueError(f"expected keys low, high, got {sorted(value)}")
+                raise ValueError(f"expected keys low, high, got {shown(sorted(value))}")
             value = [value["low"], value["high"]]
         if not isinstance(value, (list, tuple)) or len(value) != 2:
-            raise ValueError(f"expected a range [low, high] or 'low:high', got {value!r}")
+            raise ValueError(f"expected a range [low, high] or 'low:high', got {shown(value)}")
         lo, hi = _number(value[0]), _number(value[1])
         if not (math.isfinite(lo) and math.isfinite(hi)):
             raise ValueError(f"low and high must be finite numbers, got [{lo:g}, {hi:g}]")
@@ -262,7 +285,7 @@ def _n_rfe_problem(value):
     if math.isfinite(value) and value == int(value) and 0 <= value <= MAX_N_RFE:
         return None
     return (f"n_rfe must be an integer from 0 to {MAX_N_RFE} (RFEM segments of the arm), "
-            f"got {value!r}")
+            f"got {shown(value)}")
 
 
 def _check_value(name, value, where, problems):
@@ -274,7 +297,7 @@ def _check_value(name, value, where, problems):
     if not math.isfinite(value) or value < lo or (value == lo and not inclusive):
         rel = ">=" if inclusive else ">"
         problems.append(f"{where}: {name} must be finite and {rel} {lo:g} {unit}, "
-                        f"got {value!r}")
+                        f"got {shown(value)}")
 
 
 def did_you_mean(name, valid):
@@ -284,14 +307,14 @@ def did_you_mean(name, valid):
         lower = {v.lower(): v for v in valid}
         close = [lower[m] for m in difflib.get_close_matches(str(name).lower(), list(lower),
                                                              n=3, cutoff=0.6)]
-    return f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
+    return f" (did you mean {', '.join(map(shown, close))}?)" if close else ""
 
 
 def _check_name(name, where, problems):
     c = canonical(name)
     if c not in PARAMETERS:
         mean = did_you_mean(name, list(PARAMETERS) + list(ALIASES))
-        problems.append(f"{where}: unknown parameter {name!r}{mean}; valid: "
+        problems.append(f"{where}: unknown parameter {shown(name)}{mean}; valid: "
                         f"{sorted(PARAMETERS)} or aliases {sorted(ALIASES)}")
         return None
     return c
@@ -334,14 +357,14 @@ def spec_from_dict(data, base_dir=None):
     problems = []
     for key in data:
         if key not in TOP_KEYS:
-            problems.append(f"unknown key {key!r}; valid keys: {list(TOP_KEYS)}")
+            problems.append(f"unknown key {shown(key)}; valid keys: {list(TOP_KEYS)}")
     mode = data.get("mode", "grid")
     if mode not in MODES:
-        problems.append(f"mode must be one of {MODES}, got {mode!r}")
+        problems.append(f"mode must be one of {MODES}, got {shown(mode)}")
     run = _run_settings(data.get("run") or {}, problems)
     parameters = data.get("parameters") or {}
     if not isinstance(parameters, dict):
-        problems.append(f"parameters must be a table name = values, got {parameters!r}")
+        problems.append(f"parameters must be a table name = values, got {shown(parameters)}")
         parameters = {}
     points = []
     if mode == "grid":
@@ -354,7 +377,8 @@ def spec_from_dict(data, base_dir=None):
             problems.append("mode 'list' takes its points from 'points', not 'parameters'")
     for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
         if key in data and mode != wanted:
-            problems.append(f"{key!r} is only used with mode {wanted!r} (mode is {mode!r})")
+            problems.append(f"{shown(key)} is only used with mode {wanted!r} (mode is "
+                            f"{shown(mode)})")
     for pt in points:
         pt.setdefault("n_rfe", run.n_rfe)
     fill_defaults(points, CRANE)
@@ -371,7 +395,7 @@ def spec_from_dict(data, base_dir=None):
 
 def _run_settings(run, problems):
     if not isinstance(run, dict):
-        problems.append(f"run must be a table of settings, got {run!r}")
+        problems.append(f"run must be a table of settings, got {shown(run)}")
         return RunSettings()
     values = dict(RUN_DEFAULTS)
     for key, value in run.items():
@@ -381,17 +405,17 @@ def _run_settings(run, problems):
         try:
             values[key] = _number(value)
         except (ValueError, TypeError):
-            problems.append(f"run.{key}: expected a number, got {value!r}")
+            problems.append(f"run.{key}: expected a number, got {shown(value)}")
     v = values
     valid = {}
     for key in ("t_end", "output_dt", "phi_tolerance"):
         valid[key] = math.isfinite(v[key]) and v[key] > 0
         if not valid[key]:
-            problems.append(f"run.{key} must be finite and > 0, got {v[key]!r}")
+            problems.append(f"run.{key} must be finite and > 0, got {shown(v[key])}")
     for key in ("transient", "dt", "min_frequency_hz"):
         valid[key] = math.isfinite(v[key]) and v[key] >= 0
         if not valid[key]:
-            problems.append(f"run.{key} must be finite and >= 0, got {v[key]!r}")
+            problems.append(f"run.{key} must be finite and >= 0, got {shown(v[key])}")
     n_rfe_problem = _n_rfe_problem(v["n_rfe"])
     if n_rfe_problem:
         problems.append(f"run.{n_rfe_problem}")
@@ -450,10 +474,10 @@ def _lhs_points(parameters, samples, seed, problems, space=CRANE):
         problems.append("mode 'lhs' needs at least one parameter range in 'parameters'")
     if samples is None or not _whole_number(samples) or not 1 <= samples <= MAX_POINTS:
         problems.append(f"mode 'lhs' needs samples = an integer from 1 to {MAX_POINTS}, "
-                        f"got {samples!r}")
+                        f"got {shown(samples)}")
         samples = None
     if not _whole_number(seed) or seed < 0:
-        problems.append(f"seed must be an integer >= 0, got {seed!r}")
+        problems.append(f"seed must be an integer >= 0, got {shown(seed)}")
         seed = None
     ranges = {}
     for name, value in (parameters or {}).items():
@@ -488,7 +512,8 @@ def _lhs_points(parameters, samples, seed, problems, space=CRANE):
 def _list_points(points, problems, space=CRANE):
     """The points of a list, each value checked (``point <k>``)."""
     if not isinstance(points, (list, tuple)) or not points:
-        problems.append(f"mode 'list' needs points = a non-empty list of tables, got {points!r}")
+        problems.append("mode 'list' needs points = a non-empty list of tables, got "
+                        f"{shown(points)}")
         return []
     if len(points) > MAX_POINTS:
         problems.append(f"{len(points)} points; at most {MAX_POINTS}")
@@ -496,7 +521,7 @@ def _list_points(points, problems, space=CRANE):
     out = []
     for k, pt in enumerate(points):
         if not isinstance(pt, dict):
-            problems.append(f"point {k}: expected a table name = value, got {pt!r}")
+            problems.append(f"point {k}: expected a table name = value, got {shown(pt)}")
             continue
         clean = {}
         for name, value in pt.items():
@@ -508,7 +533,7 @@ def _list_points(points, problems, space=CRANE):
             try:
                 clean[c] = _number(value)
             except (ValueError, TypeError):
-                problems.append(f"point {k}: {name} must be a number, got {value!r}")
+                problems.append(f"point {k}: {name} must be a number, got {shown(value)}")
                 continue
             space.check(c, clean[c], f"point {k}", problems)
         out.append(clean)
@@ -544,7 +569,7 @@ def _swept(points):
 
 def _limits(limits, problems, metrics=METRICS):
     if not isinstance(limits, dict):
-        problems.append(f"limits must be a table metric = largest value, got {limits!r}")
+        problems.append(f"limits must be a table metric = largest value, got {shown(limits)}")
         return {}
     out = {}
     for name, value in limits.items():
@@ -556,24 +581,25 @@ def _limits(limits, problems, metrics=METRICS):
         try:
             out[name] = _number(value)
         except (ValueError, TypeError):
-            problems.append(f"limits.{name}: expected a number, got {value!r}")
+            problems.append(f"limits.{name}: expected a number, got {shown(value)}")
             continue
         if not (math.isfinite(out[name]) and out[name] >= 0):
             problems.append(f"limits.{name} must be finite and >= 0 "
-                            f"({metrics[name][0]}), got {value!r}")
+                            f"({metrics[name][0]}), got {shown(value)}")
     return out
 
 
 def _plot_axes(plot, swept, problems, space=CRANE):
     if not isinstance(plot, dict) or set(plot) - {"x", "y"}:
-        problems.append(f"plot must be a table with keys x, y, got {plot!r}")
+        problems.append(f"plot must be a table with keys x, y, got {shown(plot)}")
         return None, None
     axes = []
     for key in ("x", "y"):
         if key in plot:
             c = space.name(plot[key], f"plot.{key}", problems)
             if c is not None and swept and c not in swept:
-                problems.append(f"plot.{key} = {plot[key]!r} is not swept; swept: {list(swept)}")
+                problems.append(f"plot.{key} = {shown(plot[key])} is not swept; swept: "
+                                f"{list(swept)}")
             axes.append(c)
         else:
             axes.append(None)
@@ -584,7 +610,7 @@ def _plot_axes(plot, swept, problems, space=CRANE):
     if y is None and free:
         y = free.pop(0)
     if x is not None and x == y:
-        problems.append(f"plot.x and plot.y must differ, both are {x!r}")
+        problems.append(f"plot.x and plot.y must differ, both are {shown(x)}")
     return x, y
 
 
