@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from gpme_examples.crane import build_crane
+from gpme_io.file_names import named_path
 
 from .reports.tables import atomic_write_text
 from gpme_io.urdf import side_file_path, side_file_text, urdf_documents
@@ -31,7 +32,7 @@ def generate_urdf(out_dir=URDF_DIR):
     files = {}
     for n in URDF_CRANE_SEGMENTS:
         model = build_crane(n)
-        urdf_path = Path(out_dir) / f"{model.name}.urdf"
+        urdf_path = named_path(out_dir, model.name, ".urdf")
         text, side = urdf_documents(model, urdf_name=urdf_path.stem)
         files[urdf_path.name] = text
         files[side_file_path(urdf_path).name] = side_file_text(side)

@@ -1,13 +1,13 @@
 """Run a scenario with gpme and write its history and figures (used by `gpme simulate` and
 the gpme step of `gpme verify`)."""
 import json
-import re
 from pathlib import Path
 
 from gpme_core.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
 from gpme_core.integrate import METHODS, simulate, suggest_rk4_step
+from gpme_io.file_names import named_path
 
 from . import figures
 
@@ -54,11 +54,6 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
     return df
 
 
-def slug(name):
-    """A file-name-safe form of a scenario name."""
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "model"
-
-
 def events_json(df):
     """The run's events as JSON text: {"dependent": [names at t = 0], "dependent_final":
     [...], "events": df.attrs["events"]} (see gpme_core.integrate.simulate; times in s)."""
@@ -73,15 +68,15 @@ def write_run_outputs(scenario, df, out_dir, compressed=False):
     ``compressed`` (verify's report) the history is <name>.csv.gz with
     gpme_core.atomic.HISTORY_DIGITS significant digits instead of full precision."""
     out = Path(out_dir)
-    stem = slug(scenario.name)
-    history = f"{stem}.csv.gz" if compressed else f"{stem}.csv"
-    paths = {history: out / history}
-    atomic_write_csv(df, paths[history], HISTORY_DIGITS if compressed else None)
+    history = named_path(out, scenario.name, ".csv.gz" if compressed else ".csv")
+    paths = {history.name: history}
+    atomic_write_csv(df, history, HISTORY_DIGITS if compressed else None)
     if df.attrs.get("events"):
-        paths[f"{stem}_events.json"] = out / f"{stem}_events.json"
-        atomic_write_text(paths[f"{stem}_events.json"], events_json(df))
+        events = named_path(out, scenario.name, "_events.json")
+        paths[events.name] = events
+        atomic_write_text(events, events_json(df))
     for name, make in figures.FIGURES.items():
-        path = out / f"{stem}_{name}"
+        path = named_path(out, scenario.name, f"_{name}")
         atomic_save_figure(make(scenario, df), path)
         paths[path.name] = path
     return paths

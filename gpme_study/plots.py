@@ -9,13 +9,13 @@ any point of the cell failed.
 ``units`` ({column: unit}) and ``parameters`` (the parameter columns) describe a table that
 is not the crane's (a model-file sweep); without them the crane's names are used.
 """
-import re
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from gpme_core.atomic import atomic_save_figure
+from gpme_io import file_names
 
 from .spec import PARAMETERS, unit_of
 
@@ -41,7 +41,7 @@ def axis_label(name, units=None):
 
 def file_stem(name):
     """A file-name-safe form of a metric name (constraint and joint names come from files)."""
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
+    return file_names.file_stem(name)
 
 
 def feasible(table):

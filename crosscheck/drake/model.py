@@ -44,6 +44,7 @@ from pydrake.multibody.tree import (BodyIndex, JointIndex, PrismaticJoint, Prism
                                     RevoluteJoint, RevoluteSpring)
 
 from gpme_core.errors import ModelFileError
+from gpme_io.file_names import named_path
 from gpme_io.urdf import load_side_file, side_file_path
 
 log = logging.getLogger("gpme.crosscheck.drake")
@@ -303,7 +304,7 @@ def for_model(model, urdf_dir, name: Optional[str] = None) -> DrakeSystem:
     (default the model's name) and read back by :func:`from_urdf`, its damping checked
     against the model's."""
     from gpme_io.urdf import write_urdf
-    path = Path(urdf_dir) / f"{name or model.name}.urdf"
+    path = named_path(urdf_dir, name or model.name, ".urdf")
     path.parent.mkdir(parents=True, exist_ok=True)
     write_urdf(model, path)
     bodies = [lk.name for lk in model.links] + list(model.frames)

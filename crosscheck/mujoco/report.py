@@ -4,6 +4,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gpme_core.atomic import atomic_save_figure
+from gpme_io.file_names import file_stem
 
 from ..compare import FAIL, INFO, row_status
 from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
@@ -88,7 +89,7 @@ ROW_COLUMNS = ("section", "case", "model", "coordinate", "metric", "quantity", "
 
 def plot_name(section, model_name):
     """File name of the plot of one run section of one model (beside mujoco.html)."""
-    return f"mujoco_{section}_{model_name}.png"
+    return f"mujoco_{section}_{file_stem(model_name)}.png"
 
 
 def write_report(out_dir, df, convergence, plots, quick, scenario_names):

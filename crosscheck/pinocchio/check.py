@@ -51,6 +51,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 from gpme_core.model import Model
+from gpme_io.file_names import named_path
 from gpme_io.urdf import read_urdf, write_urdf
 from gpme_io.urdf_reader import with_link_frames
 from gpme_io.urdf_writer import link_own_frame
@@ -328,7 +329,7 @@ def urdf_case(scenario, urdf_dir: Path) -> ModelCase:
     """The scenario's model written to urdf_dir/<name>.urdf, read back by gpme_io.urdf
     (gpme) and by Pinocchio's parser."""
     original = scenario.system
-    path = Path(urdf_dir) / f"{scenario.name}.urdf"
+    path = named_path(urdf_dir, scenario.name, ".urdf")
     try:
         write_urdf(original.model, path)
         # frames that are a link's own frame are the URDF link itself (gpme_io.urdf_writer)

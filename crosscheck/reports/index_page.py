@@ -13,6 +13,8 @@ from pathlib import Path
 
 from markupsafe import Markup
 
+from gpme_io.file_names import file_stem
+
 from ..compare import CRASH_QUANTITY, FAIL, INFO, PASS
 from .check_plots import write_spread_plots
 from .html import render, table as html_table_data
@@ -125,10 +127,10 @@ def _verdict(summary, rows, meta, diff):
 def _engine_plot(run_dir, engine, section, model, spreads):
     """Relative path of the plot a check links to: the engine's own plot of that run if
     there is one, else the spread plot of its group."""
-    from gpme.runs import slug
-    candidates = [f"{engine}_{section}_{model}.png"]
+    candidates = [f"{engine}_{section}_{file_stem(model)}.png"]
     if engine == "gpme":
-        candidates += [f"runs/{slug(model)}_constraints.png", "paper/constraint_violation.png"]
+        candidates += [f"runs/{file_stem(model)}_constraints.png",
+                       "paper/constraint_violation.png"]
     for c in candidates:
         if (run_dir / c).is_file():
             return c

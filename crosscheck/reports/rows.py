@@ -53,9 +53,7 @@ stdout (``... > pinocchio.csv``); a directory without rows is one error line and
 """
 import argparse
 import gzip
-import hashlib
 import io
-import re
 import shutil
 import sys
 from pathlib import Path
@@ -64,6 +62,7 @@ from typing import List, Optional
 import pandas as pd
 
 from gpme_core.errors import GpmeError
+from gpme_io import file_names
 
 from ..compare import row_status
 from .tables import atomic_write_bytes, atomic_write_text, worst_status
@@ -74,9 +73,6 @@ INDEX_FILE = "index.csv"                # in CHECKS_DIR
 COLUMNS_FILE = "columns.csv"            # in CHECKS_DIR/<engine>
 TOLERANCES_FILE = "tolerances.csv.gz"
 SLICE_SUFFIX = ".csv.gz"
-_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
-_SAFE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9._-]*")
-MAX_SLUG = 60               # characters of readable name in an id (the hash keeps it unique)
 KEYS = ("engine", "section", "model", "quantity")
 TOLERANCE = ("tol_abs", "tol_rel", "reason")
 TOL_ID = "tol_id"
@@ -110,22 +106,19 @@ def check_name(engine, section, model, quantity):
 
 
 def check_id(name):
-    """A file- and URL-safe id of the check ``name``: its readable part (at most MAX_SLUG
-    characters of [A-Za-z0-9._-], not starting with '-' or '.') and 8 hex digits of its
-    SHA-1, so names that share a readable part still get different ids (a collision of the
-    8 digits, about 1 in 4e9 for a pair, is refused by :func:`write_rows`)."""
-    readable = _UNSAFE.sub("-", name).strip("-.")[:MAX_SLUG].rstrip("-.")
-    digest = hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
-    return f"{readable}-{digest}" if readable else digest
+    """A file- and URL-safe id of the check ``name``: its readable part (at most
+    gpme_io.file_names.MAX_READABLE characters of [A-Za-z0-9._-], others replaced by '-',
+    not starting with '-' or '.') and 8 hex digits of its SHA-1, so names that share a
+    readable part still get different ids (a collision of the 8 digits, about 1 in 4e9 for
+    a pair, is refused by :func:`write_rows`)."""
+    return file_names.hashed_stem(name, joiner="-")
 
 
 def _engine_dir(engine):
-    """The directory name of an engine under checks/: the name itself when it is file-safe
-    (at most MAX_SLUG long, not the index's name), else check_id(engine)."""
+    """The directory name of an engine under checks/: gpme_io.file_names.file_stem (the
+    name itself when plain), check_id(engine) for the index's name."""
     engine = str(engine)
-    if _SAFE_NAME.fullmatch(engine) and len(engine) <= MAX_SLUG and engine != INDEX_FILE:
-        return engine
-    return check_id(engine)
+    return check_id(engine) if engine == INDEX_FILE else file_names.file_stem(engine)
 
 
 def slice_path(name):
