@@ -32,6 +32,7 @@ flexible specs, the built model), comes in one :class:`gpme_core.errors.ModelFil
 import dataclasses
 import math
 import xml.etree.ElementTree as ET
+from collections import Counter, deque
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -440,7 +441,7 @@ def _parse(robot, problems, notes) -> _Parsed:
             what = "no name attribute" if n is None else f"an empty name {n!r}"
             problems.append(f"<link> #{k + 1} has {what}: every link needs name=...")
             link_names[k] = None
-    dup = sorted({n for n in link_names if n is not None and link_names.count(n) > 1})
+    dup = sorted(n for n, k in Counter(link_names).items() if n is not None and k > 1)
     if dup:
         problems.append(f"link names repeat: {dup}")
     inertias, bad_inertia, geometry_only = {}, {}, []
@@ -468,7 +469,7 @@ def _parse(robot, problems, notes) -> _Parsed:
         if j is None or j.parent not in names or j.child not in names:
             left_out.append(el.get("name") or f"<joint> #{k} (no name)")
     jnames = [j.name for j in joints]
-    dup = sorted({n for n in jnames if jnames.count(n) > 1})
+    dup = sorted(n for n, k in Counter(jnames).items() if k > 1)
     if dup:
         problems.append(f"joint names repeat: {dup}")
     return _Parsed([n for n in link_names if n is not None], inertias, joints, bad_inertia,
@@ -491,63 +492,145 @@ class _Tree:
     parent_joint: dict        # link -> joint
 
 
+_TREE_RULE = ("a URDF is a tree: every link but the root is the child of exactly one joint, "
+              "and no joint leads back to a link above its parent")
+
+
+def _first_cycle(links, joints) -> Optional[list]:
+    """The joints of the first directed cycle of links -> child links (in cycle order, the
+    joint that closes it last), or None; an iterative depth-first search that visits each
+    link and joint once."""
+    out = {n: [] for n in links}
+    for j in joints:
+        if j.parent in out and j.child in out:
+            out[j.parent].append(j)
+    state = {}                       # link -> 1 on the current path, 2 finished
+    for start in links:
+        if start in state:
+            continue
+        path = []                    # joints from start to the link on top of the stack
+        stack = [(start, iter(out[start]))]
+        state[start] = 1
+        while stack:
+            link, todo = stack[-1]
+            j = next(todo, None)
+            if j is None:
+                state[link] = 2
+                stack.pop()
+                if path:
+                    path.pop()
+                continue
+            if state.get(j.child) == 1:          # back to a link on the path: a cycle
+                if j.child == link:
+                    return [j]
+                first = next(k for k, p in enumerate(path) if p.parent == j.child)
+                return path[first:] + [j]
+            if j.child not in state:
+                state[j.child] = 1
+                path.append(j)
+                stack.append((j.child, iter(out[j.child])))
+    return None
+
+
+# names listed in a tree problem: a hostile URDF may give thousands (a 50 000-link cycle)
+_LISTED = 12
+
+
+def _listed(names) -> str:
+    """['a', 'b', ...] of a list of names; past _LISTED names the first and last few and
+    the count."""
+    names = list(names)
+    if len(names) <= _LISTED:
+        return str(names)
+    half = _LISTED // 2
+    return (str(names[:half])[:-1] + ", ..., " + str(names[-half:])[1:]
+            + f" ({len(names)} in all)")
+
+
+def _cycle_problem(cycle) -> str:
+    closing = cycle[-1]
+    links = [closing.child] + [j.child for j in cycle]
+    if len(links) > _LISTED:
+        half = _LISTED // 2
+        links = links[:half] + [f"... ({len(cycle) - _LISTED + 1} more links)"] + links[-half:]
+    return (f"joint {closing.name!r} (parent {closing.parent!r}, child {closing.child!r}) "
+            f"closes a cycle {' -> '.join(links)} through joints "
+            f"{_listed(j.name for j in cycle)}")
+
+
 def _tree(links, joints, problems, left_out=()):
-    """The tree of ``links`` through ``joints`` (None, with the problem appended, when there
-    is no single root or a link is not reached from it); ``left_out``: joints not in it."""
+    """The tree of ``links`` through ``joints``, or None with the problems appended: a link
+    that is the child of several joints, a cycle of joints (the first found, with its
+    joints), no single root, links not reached from the root.  Every check visits each link
+    and joint a bounded number of times; nothing walks the joints before they are known to
+    form a tree.  ``left_out``: joints not in it (named in the problem)."""
     why = (f" (joints {left_out} are left out of the tree because of their problems above)"
            if left_out else "")
-    children = {n: [] for n in links}
-    parent_joint = {}
-    for j in joints:
-        if j.parent in children and j.child in children:
-            children[j.parent].append(j)
-            if j.child in parent_joint:
-                problems.append(f"link {j.child!r} is the child of two joints "
-                                f"({parent_joint[j.child].name!r}, {j.name!r})")
-            parent_joint[j.child] = j
-    roots = [n for n in links if n not in parent_joint]
     if not links:
         problems.append("the URDF has no <link> (a <robot> needs at least one <link name=...>)"
                         + _TREE_SKIPPED)
         return None
+    children = {n: [] for n in links}
+    parents = {}                      # link -> [joints whose child it is]
+    for j in joints:
+        if j.parent in children and j.child in children:
+            children[j.parent].append(j)
+            parents.setdefault(j.child, []).append(j)
+    found = [f"link {link!r} is the child of {len(js)} joints {_listed(j.name for j in js)}"
+             for link, js in parents.items() if len(js) > 1]
+    cycle = _first_cycle(links, joints)
+    if cycle is not None:
+        found.append(_cycle_problem(cycle))
+    if found:
+        found[-1] += f"; {_TREE_RULE}"
+    roots = [n for n in links if n not in parents]
     if len(roots) != 1:
-        problems.append(f"the URDF must have exactly one root link (a link that is no joint's "
-                        f"child), found {roots}" + ("; every link is some joint's child, so "
-                                                    "the joints form a loop" if not roots else "")
-                        + why + _TREE_SKIPPED)
+        loop = "; every link is some joint's child, so the joints form a loop" if not roots \
+            else ""
+        found.append(f"the URDF must have exactly one root link (a link that is no joint's "
+                     f"child), found {_listed(roots)}{loop}{why}")
+    else:
+        reached, todo = {roots[0]}, [roots[0]]
+        while todo:
+            for j in children[todo.pop()]:
+                if j.child not in reached:
+                    reached.add(j.child)
+                    todo.append(j.child)
+        lost = [n for n in links if n not in reached]
+        if lost:
+            found.append(f"links {_listed(lost)} are not connected to the root link "
+                         f"{roots[0]!r} (a cycle of joints?){why}")
+    if found:
+        found[-1] += _TREE_SKIPPED
+        problems.extend(found)
         return None
-    reached, todo = {roots[0]}, [roots[0]]
-    while todo:
-        for j in children[todo.pop()]:
-            if j.child not in reached:
-                reached.add(j.child)
-                todo.append(j.child)
-    lost = [n for n in links if n not in reached]
-    if lost:
-        problems.append(f"links {lost} are not connected to the root link {roots[0]!r} "
-                        "(a cycle of joints?)" + why + _TREE_SKIPPED)
-        return None
-    return _Tree(roots[0], children, parent_joint)
+    return _Tree(roots[0], children, {link: js[0] for link, js in parents.items()})
 
 
 def _path(tree, top, bottom):
-    """Joints from link ``top`` down to link ``bottom`` (None if bottom is not below top)."""
+    """Joints from link ``top`` down to link ``bottom`` (None if bottom is not below top);
+    at most one step per link, whatever the tree holds."""
     out, link = [], bottom
-    while link != top:
+    for _ in range(len(tree.children) + 1):
+        if link == top:
+            return out[::-1]
         j = tree.parent_joint.get(link)
         if j is None:
             return None
         out.append(j)
         link = j.parent
-    return out[::-1]
+    return None
 
 
 def _subtree_joints(tree, link):
-    out, stack = [], [link]
+    """Joints below link ``link`` (depth first); each link is entered once."""
+    out, stack, seen = [], [link], {link}
     while stack:
         for j in tree.children[stack.pop()]:
             out.append(j)
-            stack.append(j.child)
+            if j.child not in seen:
+                seen.add(j.child)
+                stack.append(j.child)
     return out
 
 
@@ -918,10 +1001,13 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
     # owner chain index of every link (-1: fixed to the world) and its pose in that link
     owner, pose, attached = {tree.root: -1}, {tree.root: np.eye(4)}, {}
     chain_origin = {}
-    stack = [tree.root]
+    stack, seen = deque([tree.root]), {tree.root}
     while stack:
-        link = stack.pop(0)
+        link = stack.popleft()
         for j in tree.children[link]:
+            if j.child in seen:           # not in a tree (_tree refuses it); defence in depth
+                continue
+            seen.add(j.child)
             if j.name in chain_index:
                 k = chain_index[j.name]
                 chain_origin[k] = pose[link] @ j.origin
