@@ -20,6 +20,7 @@ import difflib
 import json
 import math
 import warnings
+from collections import Counter
 from pathlib import Path
 from typing import Any, Optional
 
@@ -175,7 +176,7 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
             if not bad:
                 clean[key].append(rec)
     names = [r["name"] for r in clean.get("flexible_links", [])]
-    dup = sorted({n for n in names if names.count(n) > 1})
+    dup = sorted(n for n, k in Counter(names).items() if k > 1)
     if dup:
         problems.append(f"{label}: flexible_links has more than one record for {dup} (one "
                         "record per link)")

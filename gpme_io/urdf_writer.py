@@ -24,6 +24,7 @@ fixed links as bodies and to bound the mass of the massless links at MUJOCO_BOUN
 kg m^2), which MuJoCo needs to accept a moving body; every other reader ignores it.
 """
 import xml.etree.ElementTree as ET
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,7 @@ from gpme_core.errors import ModelFileError
 from gpme_core.model import PRISMATIC, REVOLUTE, Model
 
 from .side_file import SIDE_SUFFIX, drive_record, side_document, side_file_path, side_file_text
+from .xml_text import xml_char_problem, xml_comment
 
 ROOT_LINK = "world"
 # rad or m: the <limit> written for an infinite end of a gpme joint range (URDF needs a
@@ -93,12 +95,22 @@ def _written_frames(model: Model) -> list:
 
 
 def _name_problems(model: Model) -> list:
+    """Names the URDF cannot carry: repeated within links or joints, or holding a character
+    XML 1.0 cannot hold (refused, not replaced: the reader must get the same names back)."""
     problems = []
     frames = _written_frames(model)
     link_names = [ROOT_LINK] + [lk.name for lk in model.links] + frames
     joint_names = list(model.coordinate_names) + [f + FIXED_SUFFIX for f in frames]
+    named = ([("model name", model.name)] + [("link name", n) for n in link_names[1:]]
+             + [("joint name", n) for n in joint_names])
+    for label, name in named:
+        bad = xml_char_problem(label, str(name))
+        if bad:
+            problems.append(f"{bad}; rename it (a URDF name is XML text: printable characters, "
+                            "tab, newline and carriage return)")
     for kind, names in (("link", link_names), ("joint", joint_names)):
-        dup = sorted({n for n in names if names.count(n) > 1})
+        counts = Counter(names)
+        dup = sorted(n for n in counts if counts[n] > 1)
         if dup:
             problems.append(f"URDF {kind} names would repeat: {dup} (the root link is "
                             f"{ROOT_LINK!r}, frames become links, frame F gets joint "
@@ -127,10 +139,10 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
     if problems:
         raise ModelFileError(problems)
     robot = ET.Element("robot", name=model.name)
-    robot.append(ET.Comment(
-        f" Generated from gpme model {model.name!r} by gpme_io.urdf_writer; do not edit. "
+    robot.append(xml_comment(
+        f"Generated from gpme model {model.name!r} by gpme_io.urdf_writer; do not edit. "
         f"Stiffness, spring references, gravity and drives are in the side file "
-        f"{(urdf_name or model.name)}{SIDE_SUFFIX} (docs/urdf.md). "))
+        f"{(urdf_name or model.name)}{SIDE_SUFFIX} (docs/urdf.md)."))
     mj = ET.SubElement(robot, "mujoco")
     ET.SubElement(mj, "compiler", discardvisual="false", fusestatic="false",
                   boundmass=_num(MUJOCO_BOUND), boundinertia=_num(MUJOCO_BOUND))

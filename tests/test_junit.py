@@ -123,7 +123,7 @@ def test_failure_carries_discrepancy_tolerance_reason_and_where(tree):
         assert part in msg, part
     assert failure.get("type") == "ToleranceExceeded"
     # the reason, escaped by ElementTree, the terminal escape replaced (not XML 1.0)
-    assert "round-off with cond(M) < 1e4 & \"quoted\" <tags> ?[31mred" in failure.text
+    assert "round-off with cond(M) < 1e4 & \"quoted\" <tags> \\x1b[31mred" in failure.text
 
 
 def test_non_finite_failure_says_so(tree):

@@ -26,7 +26,6 @@ The document is built as an xml.etree.ElementTree tree, so every name and value 
 XML; names MuJoCo would refuse, or that XML cannot hold, are refused first with one
 ModelError listing each (:func:`name_problems`).
 """
-import re
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
@@ -35,6 +34,7 @@ import numpy as np
 
 from gpme_core.errors import ModelError
 from gpme_core.model import REVOLUTE, Model
+from gpme_io.xml_text import xml_char_problem, xml_comment
 
 from . import mechanism as mech
 from ..reports.tables import atomic_write_text
@@ -153,10 +153,6 @@ AUX_SITES = ("aux_crank_pin", "aux_focus_1", "aux_focus_2", "aux_yoke_slot", "au
 AUX_TENDON = "aux_ellipse_string"
 AUX_YOKE_EQUALITY = "aux_scotch_yoke"
 
-# Anything outside XML 1.0's Char production (tab, newline, carriage return, U+0020-U+D7FF,
-# U+E000-U+FFFD, U+10000-U+10FFFF) cannot be written at all, not even as a character
-# reference: the C0 controls, lone surrogates, U+FFFE and U+FFFF.
-_NOT_XML_CHAR = re.compile("[^\t\n\r\u0020-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
 _VALID_NAME = ("a non-empty str of printable characters (tab, newline and carriage return "
                "allowed; XML escapes &, <, >, quotes)")
 
@@ -167,12 +163,8 @@ def _text_problem(label, value, empty_ok=False):
         return f"{label} {value!r}: must be {_VALID_NAME}, got type {type(value).__name__}"
     if not value and not empty_ok:
         return f"{label} is empty: MuJoCo refers to it by name; must be {_VALID_NAME}"
-    bad = sorted(set(_NOT_XML_CHAR.findall(value)))
-    if bad:
-        codes = ", ".join(f"U+{ord(c):04X}" for c in bad)
-        return (f"{label} {value!r}: character {codes} cannot be written in XML 1.0; "
-                f"must be {_VALID_NAME}")
-    return None
+    bad = xml_char_problem(label, value)
+    return None if bad is None else f"{bad}; must be {_VALID_NAME}"
 
 
 def name_problems(model: Model, programme: mech.EllipticProgramme | None = None) -> list[str]:
@@ -236,13 +228,6 @@ def name_problems(model: Model, programme: mech.EllipticProgramme | None = None)
     return problems
 
 
-def _comment(text):
-    """An XML comment holding ``text``: a comment has no escapes, so "--" (which would end
-    it) is written "- -" and characters XML cannot hold as their Python escapes."""
-    text = _NOT_XML_CHAR.sub(lambda m: repr(m.group())[1:-1], str(text))
-    return ET.Comment(" " + re.sub("-(?=-)", "- ", text) + " ")
-
-
 def _chain(worldbody, model):
     """Nested <body> elements of the chain (see the module docstring) under ``worldbody``."""
     frames_by_link = {}
@@ -266,7 +251,7 @@ def _chain(worldbody, model):
             ET.SubElement(body, "joint", attributes)
         mass, c, i, note = bounded_inertia(link)
         if note:
-            body.append(_comment(note))
+            body.append(xml_comment(note))
         ET.SubElement(body, "inertial", pos=_vec(c), mass=_f(mass),
                       fullinertia=_vec((i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])))
         ET.SubElement(body, "geom", type="sphere", size=_f(VIEW_SPHERE_RADIUS), pos=_vec(c),
@@ -295,8 +280,8 @@ def _mechanism(root, worldbody, model, programme, settings):
     soft = {"solref": _vec((s.timeconst, s.dampratio)),
             "solimp": " ".join((impedance, impedance, "0.001", "0.5", "2"))}
     soft_yoke = dict(soft, solref=_vec((s.yoke_timeconst or s.timeconst, s.dampratio)))
-    worldbody.append(_comment("auxiliary mechanism (crosscheck/mujoco/mechanism.py): enforces "
-                              f"{programme.names[0]} and {programme.names[1]}"))
+    worldbody.append(xml_comment("auxiliary mechanism (crosscheck/mujoco/mechanism.py): "
+                                 f"enforces {programme.names[0]} and {programme.names[1]}"))
     crank = ET.SubElement(worldbody, "body", name="aux_crank",
                           pos=_vec((xc + s.crank_offset, yc, z0)), gravcomp="1")
     ET.SubElement(crank, "joint", name=mech.CRANK, type="hinge", axis="0 1 0",
@@ -407,7 +392,7 @@ def mjcf_element(model: Model, dt: float = 1e-4, constraints: Sequence | None = 
     if model.drives:
         actuator = ET.SubElement(root, "actuator")
         for d in model.drives:
-            actuator.append(_comment(f"ctrl = {d.function!r} (N or N m), set by the caller"))
+            actuator.append(xml_comment(f"ctrl = {d.function!r} (N or N m), set by the caller"))
             ET.SubElement(actuator, "motor", name=DRIVE_PREFIX + d.joint, joint=d.joint, gear="1")
     if initial_state is not None:
         _keyframe(root, model, programme, initial_state, initial_time)
@@ -433,7 +418,7 @@ def mjcf_text(model: Model, dt: float = 1e-4, constraints: Sequence | None = Non
     """
     root = mjcf_element(model, dt, constraints, settings, initial_state, initial_time)
     ET.indent(root, space="  ")
-    header = ET.tostring(_comment(f"{model.name}: {GENERATOR_NOTE}"), encoding="unicode")
+    header = ET.tostring(xml_comment(f"{model.name}: {GENERATOR_NOTE}"), encoding="unicode")
     return header + "\n" + ET.tostring(root, encoding="unicode") + "\n"
 
 

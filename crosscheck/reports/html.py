@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gpme_io.xml_text import xml_safe_text
+
 from ..compare import FAIL, row_status
 
 TEMPLATES = Path(__file__).with_name("templates")
@@ -64,6 +66,18 @@ def table(df, status_column=None, max_rows=None, left_columns=()):
                  status_column if status_column in df.columns else None)
 
 
+def printable(value):
+    """Every value a template prints, before autoescaping: a str with characters XML and
+    HTML cannot hold (controls from a name or a traceback) shown as their escapes
+    (gpme_io.xml_text.xml_safe_text); markup (already escaped) keeps its type."""
+    if isinstance(value, str):
+        safe = xml_safe_text(value)
+        return type(value)(safe) if hasattr(value, "__html__") else safe
+    if value is None or isinstance(value, (bool, int, float)) or hasattr(value, "__html__"):
+        return value
+    return xml_safe_text(str(value))        # a Path, a numpy scalar, any object's text
+
+
 @lru_cache(maxsize=1)
 def environment():
     """The Jinja2 environment of the report templates (autoescape, undefined names are
@@ -71,7 +85,7 @@ def environment():
     import jinja2
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
                              autoescape=True, undefined=jinja2.StrictUndefined,
-                             trim_blocks=True, lstrip_blocks=True)
+                             trim_blocks=True, lstrip_blocks=True, finalize=printable)
     env.filters["number"] = number
     return env
 

@@ -29,15 +29,16 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Optional
 
 from gpme_core.atomic import atomic_write_bytes
+from gpme_io.xml_text import make_tree_safe, xml_safe_text
 
-# characters XML 1.0 cannot carry (control characters from a traceback, say)
-_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
 _NOT_NAME = re.compile(r"[^A-Za-z0-9_]+")
 ROOT_NAME = "gpme verify"
 
 
 def _text(value: Any) -> str:
-    return _NOT_XML.sub("?", str(value))
+    """``value`` as text XML can hold (a control character from a traceback, say, shown as
+    its escape ``\\x1b``; gpme_io.xml_text)."""
+    return xml_safe_text(str(value))
 
 
 def _line(value: Any) -> str:
@@ -179,7 +180,7 @@ def junit_tree(summary: Mapping[str, Any], report_dir: str = "") -> ET.Element:
     total_time = _seconds(run.get("wall_time_s"))
     if total_time is not None:
         root.set("time", total_time)
-    return root
+    return make_tree_safe(root)       # names of engines, models, cases and entries included
 
 
 def junit_xml(summary: Mapping[str, Any], report_dir: str = "") -> bytes:

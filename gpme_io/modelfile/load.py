@@ -23,6 +23,7 @@ from gpme_examples.crane import CraneParameters
 from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, URDF_LIMIT,
                                  InputFileError, check_input_file, read_input_file)
 from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
+from gpme_io.xml_text import xml_char_problem
 
 from . import expressions as ex
 from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, POINT_SYMBOLS, SECTION_SHAPES,
@@ -171,6 +172,11 @@ class _Checker:
         v = table[key]
         if not isinstance(v, str) or not v.strip():
             self.add(where, f"must be a non-empty string ({what}), got {_type_name(v)} {v!r}")
+            return None
+        bad = xml_char_problem("string", v)
+        if bad:                  # names go into URDF, MJCF and reports, which cannot hold it
+            self.add(where, f"{bad} (names and expressions go into URDF, MJCF and the "
+                     "report; use printable characters)")
             return None
         if choices is not None and v not in choices:
             same_case = [ch for ch in choices if ch.lower() == v.lower()]
