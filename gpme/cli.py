@@ -2,7 +2,8 @@
 everything, sweep parameters.  Every command takes ``--model FILE`` (a TOML model file,
 docs/models.md); without it the paper's crane is used.  Run `gpme --help`.
 
-Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on stderr).
+Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on stderr),
+130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (gpme.signals: at every moment, compilation included).
 """
 import argparse
 import sys
@@ -14,35 +15,11 @@ import numpy as np
 
 from gpme.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
 from gpme.out_lock import output_dir_problem
+from gpme import signals
+from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Terminated)
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (as verify's)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (or SIGHUP) received: raised in the main thread like Ctrl-C's
-    KeyboardInterrupt, so every ``finally`` and staging-directory cleanup runs; the command
-    then exits with 128 + the signal number (143 for SIGTERM)."""
-
-    def __init__(self, signum):
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _raise_terminated(signum, frame):
-    raise Terminated(signum)
-
-
-def _install_signal_handlers():
-    """SIGTERM and SIGHUP end the command like Ctrl-C (main thread only; no-op elsewhere)."""
-    import signal
-    for name in ("SIGTERM", "SIGHUP"):
-        sig = getattr(signal, name, None)
-        if sig is not None:
-            try:
-                signal.signal(sig, _raise_terminated)
-            except ValueError:      # not the main thread (e.g. called from a test worker)
-                pass
 
 
 def _error(msg):
@@ -221,30 +198,44 @@ def _simulate_models(args):
     return paths, rows
 
 
+def simulate_problems(args) -> list:
+    """Every problem of `gpme simulate`'s options, found from the values alone (no model is
+    built): one message lists them all."""
+    from gpme_core.rfem import MAX_SEGMENTS
+    problems = [p for p in (output_dir_problem(args.out),) if p]
+    finite = float("inf")
+    dt_ok = args.dt is None or 0 < args.dt < finite
+    t_ok = args.t_end is None or 0 < args.t_end < finite
+    if not dt_ok:
+        problems.append(f"--dt must be a positive, finite step in s, got {args.dt!r}")
+    if not t_ok:
+        problems.append(f"--t-end must be a positive, finite duration in s, got {args.t_end!r}")
+    if dt_ok and t_ok and args.dt is not None and args.t_end is not None \
+            and args.dt > args.t_end:
+        problems.append(f"--dt {args.dt!r} s is longer than --t-end {args.t_end!r} s; give "
+                        "a step no longer than the run")
+    if args.n_rfe is not None and not 0 <= args.n_rfe <= MAX_SEGMENTS:
+        problems.append(f"--n-rfe must be 0 (rigid arm) or a number of RFEM segments up to "
+                        f"{MAX_SEGMENTS} (gpme_core.rfem.MAX_SEGMENTS), got {args.n_rfe}")
+    if args.case == "rigid" and (args.static_arm or args.n_rfe is not None):
+        problems.append("--static-arm and --n-rfe set the flexible arm; --case rigid has none "
+                        "(use --case flexible or both)")
+    if args.model and (args.case != "both" or args.static_arm or args.on_manifold or
+                       args.n_rfe is not None):
+        problems.append("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
+                        "crane runs; with --model the model file sets them")
+    return problems
+
+
 def _simulate(args):
     from gpme_core.errors import GpmeError
-    if output_dir_problem(args.out):
-        return _error(output_dir_problem(args.out))
-    if args.dt is not None and not 0 < args.dt < float("inf"):
-        return _error(f"--dt must be a positive, finite step in s, got {args.dt!r}")
-    if args.t_end is not None and not (args.t_end > 0 and args.t_end < float("inf")):
-        return _error(f"--t-end must be a positive duration in s, got {args.t_end!r}")
-    if args.dt is not None and args.t_end is not None and args.dt > args.t_end:
-        return _error(f"--dt {args.dt!r} s is longer than --t-end {args.t_end!r} s; give "
-                      "a step no longer than the run")
+    problems = simulate_problems(args)
+    if problems:
+        return _error("; ".join(problems) if len(problems) == 1
+                      else f"{len(problems)} problems:\n  " + "\n  ".join(problems))
     if args.dt is not None and args.method not in (None, "RK4", "RadauIIA"):
         print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
               "(its steps follow its error control)", flush=True)
-    if args.n_rfe is not None and args.n_rfe < 0:
-        return _error(f"--n-rfe must be 0 (rigid arm) or a positive number of RFEM "
-                      f"segments, got {args.n_rfe}")
-    if args.case == "rigid" and (args.static_arm or args.n_rfe is not None):
-        return _error("--static-arm and --n-rfe set the flexible arm; --case rigid has none "
-                      "(use --case flexible or both)")
-    if args.model and (args.case != "both" or args.static_arm or args.on_manifold or
-                       args.n_rfe is not None):
-        return _error("--case, --n-rfe, --on-manifold and --static-arm choose the built-in "
-                      "crane runs; with --model the model file sets them")
     from gpme.out_lock import exclusive_output
     try:
         with exclusive_output(args.out):
@@ -401,16 +392,6 @@ def build_parser():
     return parser
 
 
-def _ignore_late_signals():
-    """The command's work is done and written: a SIGTERM or SIGINT during the interpreter's
-    shutdown would only turn exit 0 into a death by signal."""
-    import signal
-    for name in ("SIGTERM", "SIGHUP", "SIGINT"):
-        sig = getattr(signal, name, None)
-        if sig is not None:
-            signal.signal(sig, signal.SIG_IGN)
-
-
 def console_main():
     """Entry point of the `gpme` script and `python -m gpme.cli`: main, then exit with its
     status, late signals ignored."""
@@ -418,25 +399,40 @@ def console_main():
 
 
 def main(argv=None, ignore_late_signals=False):
+    """Run one command; returns its exit status (docs/ci.md): 0 passed, 1 a check failed,
+    2 bad input, 130 Ctrl-C, 128 + the signal number for SIGTERM (143) and SIGHUP (129)."""
     args = build_parser().parse_args(argv)
-    _install_signal_handlers()
+    signals.install()
     try:
         code = args.func(args)
+        signals.raise_if_pending()      # a signal swallowed somewhere is still an interruption
         if ignore_late_signals:
-            _ignore_late_signals()
+            signals.ignore_late_signals()
         return code
     except Terminated as exc:
         import signal
         print(f"terminated ({signal.Signals(exc.signum).name}); finished files kept, "
               "partial output removed", file=sys.stderr)
-        return 128 + exc.signum
-    except KeyboardInterrupt:
+        return signals.exit_status(exc)
+    except KeyboardInterrupt as exc:
         print("interrupted; finished files kept, partial output removed", file=sys.stderr)
-        return 130
+        return signals.exit_status(exc)
     except BrokenPipeError:          # output piped into a reader that stopped (| head)
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
+    except Exception as exc:
+        if not signals.pending():
+            raise
+        # an error after a signal is the signal's doing (e.g. numba's compiler left
+        # without its object code): the command ends as interrupted
+        import signal
+        first = signals.pending()[0]
+        print(f"terminated ({signal.Signals(first).name}, then {type(exc).__name__}); "
+              "finished files kept, partial output removed", file=sys.stderr)
+        return signals.exit_status(signals.interruption(first))
+    finally:
+        signals.cancel_delivery()
 
 
 if __name__ == "__main__":
