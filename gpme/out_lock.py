@@ -47,6 +47,26 @@ def exclusive_output(directory, flag="--out"):
         os.close(fd)        # releases the lock
 
 
+def busy_problem(directory, flag="--out"):
+    """The message of :class:`OutputBusyError` when another process holds ``directory``'s
+    lock now, else None; creates nothing (a check made before any work, e.g. a sweep's
+    cost estimate; :func:`exclusive_output` still takes the lock for the writing)."""
+    import fcntl
+    path = Path(directory) / LOCK_NAME
+    try:
+        fd = os.open(path, os.O_RDWR)
+    except OSError:
+        return None                   # no lock file (or unreadable: exclusive_output says)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return (f"{flag} {str(directory)!r} is being written by another gpme run "
+                f"({_holder(path)}); wait for it to finish or give another {flag}")
+    finally:
+        os.close(fd)                  # releases the lock if it was taken
+    return None
+
+
 def _holder(path):
     try:
         info = json.loads(path.read_text())

@@ -195,6 +195,9 @@ def main(args):
     out_problem = out_dir_problem(args.out)
     if out_problem:
         problems.append(out_problem)
+    else:
+        from gpme.out_lock import busy_problem
+        problems += [p for p in (busy_problem(args.out),) if p]   # before the estimate
     spec, data = None, None
     data = spec_dict(args, problems)
     if data is not None:          # the --config file was read: the whole description

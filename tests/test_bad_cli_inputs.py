@@ -49,10 +49,10 @@ def _model_copy(tmp_path, **run):
 # (id, argv after "simulate", words that must all be in the message)
 SIMULATE_CASES = [
     ("t_end_absurd", ["--t-end", "1e12"], ["1e+12", "rows", "GiB", "shorten t_end"]),
-    ("t_end_negative", ["--t-end", "-1"], ["--t-end must be a positive duration", "-1.0"]),
-    ("t_end_zero", ["--t-end", "0"], ["--t-end must be a positive duration", "0.0"]),
-    ("t_end_nan", ["--t-end", "nan"], ["--t-end must be a positive duration", "nan"]),
-    ("t_end_inf", ["--t-end", "inf"], ["--t-end must be a positive duration", "inf"]),
+    ("t_end_negative", ["--t-end", "-1"], ["--t-end must be a positive, finite duration", "-1.0"]),
+    ("t_end_zero", ["--t-end", "0"], ["--t-end must be a positive, finite duration", "0.0"]),
+    ("t_end_nan", ["--t-end", "nan"], ["--t-end must be a positive, finite duration", "nan"]),
+    ("t_end_inf", ["--t-end", "inf"], ["--t-end must be a positive, finite duration", "inf"]),
     ("dt_zero", ["--dt", "0"], ["--dt must be a positive, finite step", "0.0"]),
     ("dt_negative", ["--dt=-1e-3"], ["--dt must be a positive, finite step", "-0.001"]),
     ("dt_nan", ["--dt", "nan"], ["--dt must be a positive, finite step", "nan"]),
@@ -63,6 +63,14 @@ SIMULATE_CASES = [
      ["dt = 0.01 s is unstable at the start", "stiffest mode", "Hz", "use dt <="]),
     ("n_rfe_negative", ["--case", "flexible", "--n-rfe", "-1"],
      ["--n-rfe must be 0", "-1"]),
+    # refused from the number, before any model is built (it took a minute of building)
+    ("n_rfe_huge", ["--case", "flexible", "--n-rfe", "100000"],
+     ["--n-rfe must be 0", "up to 1000", "got 100000"]),
+    # every problem of the options in one message, not only the first
+    ("t_end_nan_dt_inf", ["--t-end", "nan", "--dt", "inf"],
+     ["2 problems", "--dt must be a positive, finite step", "--t-end must be a positive"]),
+    ("three_problems", ["--t-end", "-1", "--dt", "0", "--case", "rigid", "--n-rfe", "3"],
+     ["3 problems", "--dt must", "--t-end must", "--case rigid has none"]),
     ("n_rfe_over_budget", ["--case", "flexible", "--n-rfe", "40", "--t-end", "1"],
      ["estimated wall time", "above the limit of 1 h", "--force", "fewer RFEM segments"]),
     ("history_over_memory", ["--case", "rigid", "--t-end", "1e5", "--dt", "1e-3"],

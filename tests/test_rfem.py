@@ -79,5 +79,5 @@ def test_bad_beam_is_reported_with_every_problem():
     with pytest.raises(ModelError, match="youngs_modulus must be positive") as exc:
         cantilever(3, bad)
     assert "area must be positive" in str(exc.value)
-    with pytest.raises(ModelError, match="number of segments must be an integer >= 0"):
+    with pytest.raises(ModelError, match="number of segments must be an integer from 0 to 1000"):
         cantilever(-1)
