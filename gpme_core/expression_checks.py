@@ -37,6 +37,8 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from . import expression_bounds as bounds
+
 SMOOTH_HINT = ("the GPME needs the second derivative of every constraint and programme "
                "(kappa, the programmed acceleration); write a smooth form")
 
@@ -137,7 +139,10 @@ def read_expression(value: object, symbols: Mapping[str, sp.Symbol], label: str,
     """(SymPy expression or None, [problem, ...]) of a user's ``value``.
 
     value   : a SymPy expression or a string read by ``sympy.sympify`` (code you trust:
-              sympify evaluates it; gpme_io.modelfile parses a file's text without eval)
+              sympify evaluates it as Python; gpme_io.modelfile parses a file's text
+              without eval).  A string is read unevaluated and evaluated node by node
+              within gpme_core.expression_bounds (no power of 3.7e8 digits is started);
+              any expression whose second derivatives would be too large is refused
     symbols : {name: symbol} of the allowed symbols; a symbol of the same name but other
               assumptions (``Symbol('x', real=True)``) is taken as the allowed one
     label   : what the expression is, starting every problem (e.g. "constraint 'Phi'")
@@ -148,10 +153,19 @@ def read_expression(value: object, symbols: Mapping[str, sp.Symbol], label: str,
     """
     if isinstance(value, str):
         try:
-            expr = sp.sympify(value)
+            unevaluated = sp.sympify(value, evaluate=False)
+            shape = bounds.tree_problem(unevaluated)
+            if shape:
+                return None, [f"{label}: {_short(value)}: {shape}"]
+            expr = bounds.evaluate_bounded(unevaluated)
+        except bounds.BoundError as exc:
+            return None, [f"{label}: {_short(value)}: {exc}"]
+        except RecursionError:
+            return None, [f"{label}: {_short(value)}: "
+                          f"{bounds.shape_problem(bounds.MAX_DEPTH + 1, 0)}"]
         except Exception as exc:           # sympify evaluates the text: any error is possible
             cause = getattr(exc, "base_exc", None) or exc
-            return None, [f"{label}: cannot read {value!r} as a SymPy expression "
+            return None, [f"{label}: cannot read {_short(value)} as a SymPy expression "
                           f"({type(cause).__name__}: {_first_line(cause)})"]
     else:
         try:
@@ -163,6 +177,10 @@ def read_expression(value: object, symbols: Mapping[str, sp.Symbol], label: str,
         return None, [f"{label}: {_short(value)} is not a scalar expression in "
                       f"{', '.join(symbols)} "
                       f"(got a {type(expr).__name__})"]
+    size = bounds.tree_problem(expr) or bounds.derivative_problem(expr)
+    if size:                               # a deep tree is not printed (recursive printer)
+        shown = _short(value) if isinstance(value, str) else "the expression"
+        return None, [f"{label}: {shown}: {size}"]
     by_name = {s.name: s for s in symbols.values()}
     rename = {s: by_name[s.name] for s in expr.free_symbols
               if isinstance(s, sp.Symbol) and not isinstance(s, sp.Dummy)

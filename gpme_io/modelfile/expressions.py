@@ -20,6 +20,7 @@ from typing import Mapping, Optional
 
 import sympy as sp
 
+from gpme_core import expression_bounds as bounds
 from gpme_core import expression_checks as checks
 
 # name in the file -> (SymPy function, number of arguments)
@@ -72,32 +73,45 @@ def parse_expression(text: object, symbols: Mapping[str, str]) -> tuple:
         return None, ["is empty; write an expression in " + describe_symbols(symbols)]
     if len(text) > MAX_LENGTH:
         return None, [f"is {len(text)} characters long; at most {MAX_LENGTH}"]
+    source = text.strip()
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        tree = ast.parse(source, mode="eval")
     except SyntaxError as exc:
         return None, [f"{text!r} is not an expression ({exc.msg} at column {exc.offset})"]
+    except (RecursionError, MemoryError):
+        return None, [f"{_shown(text)}: {bounds.shape_problem(bounds.MAX_DEPTH + 1, 0)}"]
+    shape = bounds.shape_problem(*bounds.shape(tree.body, ast.iter_child_nodes))
+    if shape:
+        return None, [f"{_shown(text)}: {shape}"]
     try:
-        expr = _convert(tree.body, symbols)
+        expr = _convert(tree.body, symbols, source)
     except _Refused as exc:
-        return None, [f"{text!r}: {exc}"]
-    except RecursionError:
-        return None, [f"{text!r}: nested too deeply"]
+        return None, [f"{_shown(text)}: {exc}"]
+    except RecursionError:                 # SymPy's own recursion inside the depth bound
+        return None, [f"{_shown(text)}: {bounds.shape_problem(bounds.MAX_DEPTH + 1, 0)}"]
+    size = bounds.derivative_problem(expr)
+    if size:
+        return None, [f"{_shown(text)}: {size}"]
     problems = []
     bad = sorted({type(a).__name__ for a, _ in checks.non_smooth_parts(expr)})
     if bad:
         problems.append(f"{text!r} becomes {bad} in SymPy, which is not smooth; {_SMOOTH_HINT}")
-    problems += checks.constant_problems(expr, f"{text!r} = {expr}")
+    problems += checks.constant_problems(expr, f"{_shown(text)} = {bounds.short(str(expr), 80)}")
     return (None if problems else expr), problems
 
 
-def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
+def _convert(node: ast.AST, symbols: Mapping[str, str], source: str) -> sp.Expr:
+    """SymPy of ``node``; every number, power and product bounded before it is built
+    (gpme_core.expression_bounds); _Refused naming the part of ``source`` and why."""
     if isinstance(node, ast.Constant):
         v = node.value
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise _Refused(f"{v!r} is not a number; only real numbers are allowed")
         if isinstance(v, float) and not math.isfinite(v):
             raise _Refused(f"a number overflows to {v!r}; numbers must be finite")
-        return sp.Integer(v) if isinstance(v, int) else sp.Float(v)
+        number = sp.Integer(v) if isinstance(v, int) else sp.Float(v)
+        _bounded(bounds.constant_problem(number), node, source)
+        return number
     if isinstance(node, ast.Name):
         name = node.id
         if name in symbols:
@@ -109,7 +123,7 @@ def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
         raise _Refused(f"unknown symbol {name!r}{_did_you_mean(name, list(symbols) + list(CONSTANTS))}"
                        f"; allowed {describe_symbols(symbols)}, and the constants pi, E")
     if isinstance(node, ast.UnaryOp):
-        arg = _convert(node.operand, symbols)
+        arg = _convert(node.operand, symbols, source)
         if isinstance(node.op, ast.USub):
             return -arg
         if isinstance(node.op, ast.UAdd):
@@ -127,7 +141,12 @@ def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
                ast.Pow: lambda a, b: a ** b}
         if type(op) not in ops:
             raise _Refused(f"the operator {_op_text(op)!r} is not allowed; use + - * / **")
-        return ops[type(op)](_convert(node.left, symbols), _convert(node.right, symbols))
+        left, right = _convert(node.left, symbols, source), _convert(node.right, symbols, source)
+        if isinstance(op, ast.Pow):
+            _bounded(bounds.power_problem(left, right), node, source)
+        out = ops[type(op)](left, right)
+        _bounded(bounds.constant_problem(out), node, source)
+        return out
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name):
             raise _Refused("only the named functions "
@@ -144,7 +163,7 @@ def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
         if len(node.args) != arity:
             raise _Refused(f"{name}() takes {arity} argument{'s' if arity > 1 else ''}, "
                            f"got {len(node.args)}")
-        return fn(*[_convert(a, symbols) for a in node.args])
+        return fn(*[_convert(a, symbols, source) for a in node.args])
     if isinstance(node, ast.Attribute):
         raise _Refused(f"attribute access ('.{node.attr}') is not allowed")
     if isinstance(node, (ast.Compare, ast.BoolOp, ast.IfExp)):
@@ -153,6 +172,18 @@ def _convert(node: ast.AST, symbols: Mapping[str, str]) -> sp.Expr:
     raise _Refused(f"{type(node).__name__} is not allowed; write numbers, "
                    f"{describe_symbols(symbols)}, pi, E, + - * / ** and the functions "
                    f"{', '.join(FUNCTIONS)}")
+
+
+def _shown(text: str) -> str:
+    """repr of a user's text for a message, cut to 80 characters."""
+    return repr(text) if len(text) <= 80 else repr(text[:75]) + " ..."
+
+
+def _bounded(problem: Optional[str], node: ast.AST, source: str) -> None:
+    """Raise _Refused '<the node's text>: <problem>' when ``problem`` is not None."""
+    if problem:
+        part = ast.get_source_segment(source, node) or ""
+        raise _Refused(problem if part == source else f"{bounds.short(part)}: {problem}")
 
 
 def _op_text(op: ast.AST) -> str:
