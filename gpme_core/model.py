@@ -29,6 +29,29 @@ REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
 JOINT_KINDS = (REVOLUTE, PRISMATIC)
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+# |axis| - 1 accepted for a joint axis (a unit vector written in 9 significant digits)
+AXIS_UNIT_TOL = 1e-9
+# Shortest joint axis a reader normalises (gpme_io.urdf_reader): an axis this short is a
+# zero vector plus round-off more likely than a direction, and normalising it multiplies
+# its round-off by 1/|axis| (1e6 here: 1e-16 relative becomes 1e-10 in the direction).
+MIN_AXIS_LENGTH = 1e-6
+
+
+def axis_problem(axis) -> Optional[str]:
+    """None for a unit 3-vector (|axis| = 1 within AXIS_UNIT_TOL), else what is wrong: the
+    shape, a value that is not finite, or its length (degenerate below MIN_AXIS_LENGTH)."""
+    a = np.asarray(axis, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        return f"axis must be a unit 3-vector, got {np.ravel(a).tolist()} (finite numbers)"
+    length = float(np.linalg.norm(a))
+    if length < MIN_AXIS_LENGTH:
+        return (f"axis must be a unit 3-vector, got {a.tolist()}, which is degenerate: its "
+                f"length {length:.3g} is below {MIN_AXIS_LENGTH:g} (no direction: "
+                "normalising it would multiply its round-off by 1/|axis|); e.g. [0, 0, 1]")
+    if abs(length - 1.0) > AXIS_UNIT_TOL:
+        return (f"axis must be a unit 3-vector, got {a.tolist()} of length {length:.6g} "
+                f"(1 within {AXIS_UNIT_TOL:g}); divide it by its length")
+    return None
 
 
 def frozen_array(values, dtype=float):
@@ -278,9 +301,9 @@ def validate_model(model):
         seen.add(j.name)
         if j.kind not in JOINT_KINDS:
             problems.append(f"{lbl}: kind must be one of {JOINT_KINDS}, got {j.kind!r}")
-        axis = np.asarray(j.axis, dtype=float)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or abs(np.linalg.norm(axis) - 1) > 1e-9:
-            problems.append(f"{lbl}: axis must be a unit 3-vector, got {np.ravel(axis).tolist()}")
+        problem = axis_problem(j.axis)
+        if problem:
+            problems.append(f"{lbl}: {problem}")
         problems += _rigid_transform_problems(f"{lbl} origin", j.origin)
         for fld, unit in (("stiffness", "N/m or N m/rad"), ("damping", "N s/m or N m s/rad")):
             v = getattr(j, fld)

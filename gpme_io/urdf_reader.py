@@ -45,8 +45,8 @@ from gpme_core import time_functions
 from gpme_core import transforms as tf
 from gpme_core.errors import ModelError, ModelFileError
 from gpme_core.inertia import RigidBodyInertia
-from gpme_core.model import (PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder,
-                             FlexibleLinkInfo, Model, validate_model)
+from gpme_core.model import (MIN_AXIS_LENGTH, PRISMATIC, REVOLUTE, STANDARD_GRAVITY,
+                             ChainBuilder, FlexibleLinkInfo, Model, validate_model)
 from gpme_core.rfem import BeamProperties, BeamSection
 
 from .input_files import URDF_LIMIT, InputFileError, read_input_file
@@ -371,9 +371,14 @@ def _read_joint(el, link_names, problems, notes):
         if ax is not None:
             axis = _floats(ax.get("xyz"), 3, f"{label} <axis xyz>", problems, (1, 0, 0))
         scale = float(np.max(np.abs(axis)))
-        if scale == 0.0:
-            problems.append(f"{label}: <axis xyz> must not be zero, got {ax.get('xyz')!r} "
-                            "(a unit vector in the joint frame, e.g. '0 0 1')")
+        length = scale * float(np.linalg.norm(axis / scale)) if scale > 0 else 0.0
+        if length < MIN_AXIS_LENGTH:
+            why = "must not be zero" if scale == 0.0 else (
+                f"is degenerate: its length {length:.3g} is below {MIN_AXIS_LENGTH:g} (no "
+                "direction: normalising it would multiply its round-off by 1/|axis|)")
+            problems.append(f"{label}: <axis xyz> {why}, got {ax.get('xyz')!r} (a unit "
+                            "vector in the joint frame, e.g. '0 0 1'; other lengths are "
+                            "normalised)")
             axis = np.array((1.0, 0.0, 0.0))
         else:
             axis = axis / scale
