@@ -29,6 +29,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from . import fast
+from .constraint_rank import dependence_problem
 from .constraints import bind_constraints, evaluate_constraints
 from .dynamics import dynamics_terms
 from .errors import ConstraintError, ModelError
@@ -179,6 +180,7 @@ class ProgrammedMotion:
         diag = np.abs(np.diag(r))
         if diag.min() <= SINGULAR_RCOND * max(diag.max(), 1e-300):
             raise ConstraintError(
+                dependence_problem(a, self.constraint_names, t, q) or
                 f"at t = {t:.6g} s the constraint Jacobian has rank < {self.n_constraints}: "
                 f"the constraints {list(self.constraint_names)} are dependent or cannot be "
                 f"controlled by any coordinate at q = {np.round(q, 6).tolist()}")
@@ -208,10 +210,11 @@ class ProgrammedMotion:
     def velocity_map(self, a, t=0.0, q=None):
         """Gamma = dq_dot_dc/dq_dot_ic = -A_dc^-1 A_ic (m, n - m), checking A_dc."""
         self._require_partition()
-        return self._velocity_map(a, self.ic, self.dc, self.dependent, t, q)
+        return self._velocity_map(a, self.ic, self.dc, self.dependent, t, q,
+                                  self.constraint_names)
 
     @staticmethod
-    def _velocity_map(a, ic, dc, names, t, q):
+    def _velocity_map(a, ic, dc, names, t, q, constraint_names=None):
         a_dc = a[:, dc]
         try:
             inv = np.linalg.inv(a_dc)    # m x m, m small: explicit inverse is cheapest
@@ -219,7 +222,7 @@ class ProgrammedMotion:
             inv = np.full_like(a_dc, np.inf)
         rcond = _relative_rcond(a, dc, _rcond(a_dc, inv))
         if not rcond > SINGULAR_RCOND:
-            raise _singular_partition(names, rcond, t, q)
+            raise _singular_partition(names, rcond, t, q, a, constraint_names)
         return -inv @ a[:, ic], inv
 
     def solve(self, t, q, q_dot, switch_below=None):
@@ -265,7 +268,7 @@ class ProgrammedMotion:
                     names, ic, dc, rel = new, new_ic, new_dc, new_rel
                     q_ddot, lam, rcond, ok = trial
         if not rel > SINGULAR_RCOND:
-            raise _singular_partition(names, rel, t, q)
+            raise _singular_partition(names, rel, t, q, a, self.constraint_names)
         if not ok:
             raise ConstraintError(f"at t = {t:.6g} s the reduced GPME matrix is singular "
                                   f"at q = {np.round(q, 6).tolist()}")
@@ -331,7 +334,14 @@ class ProgrammedMotion:
         return q, q_dot
 
 
-def _singular_partition(names, rcond, t, q):
+def _singular_partition(names, rcond, t, q, a=None, constraint_names=None):
+    """The error of a singular dependent block; when A itself has rank < m (no partition
+    can be regular) the constraints that are dependent, by name
+    (gpme_core.constraint_rank)."""
+    dependent = (None if a is None or constraint_names is None
+                 else dependence_problem(a, constraint_names, t, q))
+    if dependent:
+        return ConstraintError(dependent)
     qs = "" if q is None else f" at q = {np.round(q, 6).tolist()}"
     return ConstraintError(
         f"at t = {t:.6g} s the dependent block K_dc of the constraint Jacobian "
