@@ -36,6 +36,7 @@ from pathlib import Path
 import pandas as pd
 
 from gpme.out_lock import exclusive_output, output_file_problem
+from gpme_core.errors import OutputWriteError
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .engines import missing_message
@@ -202,13 +203,21 @@ def _claim_run_dir(root, run_id):
     runs started in the same second) with an owner file naming this process (so that a
     later run can tell a dead run's leftovers from a live run's); _publish picks the final
     name."""
-    root.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=PARTIAL_SUFFIX, dir=root))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(staging, 0o777 & ~umask)      # mkdtemp's 0700 would hide the report from others
-    (staging / OWNER_FILE).write_text(json.dumps({"pid": os.getpid(),
-                                                  "host": socket.gethostname()}))
+    staging = None
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=PARTIAL_SUFFIX, dir=root))
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would hide the report from others
+        atomic_write_text(staging / OWNER_FILE, json.dumps({"pid": os.getpid(),
+                                                            "host": socket.gethostname()}))
+    except OSError as exc:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+        if isinstance(exc, OutputWriteError):
+            raise
+        raise OutputWriteError(staging or root, exc) from None
     return staging
 
 
@@ -384,6 +393,8 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                 # checks of gpme's own runs made on the way (its observed order) are gpme's
                 prerequisites.append(other_rows(table, step))
                 tables[step] = own_rows(table, step)
+        except OutputWriteError:
+            raise                 # the report cannot be written: the run stops (exit 74)
         except Exception as exc:  # a crashed step is a failed check, reported in full
             tables[step] = _crash_row(step, exc)
             write_rows(normalise(tables[step]), staging, step)   # its row, linked by the index
@@ -473,10 +484,13 @@ def _num(v):
 
 def _point_latest(root, run_id):
     tmp = root / f".latest.{os.getpid()}.tmp"
-    if tmp.is_symlink() or tmp.exists():
-        tmp.unlink()
-    os.symlink(run_id, tmp)
-    os.replace(tmp, root / "latest")
+    try:
+        if tmp.is_symlink() or tmp.exists():
+            tmp.unlink()
+        os.symlink(run_id, tmp)
+        os.replace(tmp, root / "latest")
+    except OSError as exc:
+        raise OutputWriteError(root / "latest", exc) from None
 
 
 def estimate_runs(scenarios, quick, force):

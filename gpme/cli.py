@@ -3,7 +3,9 @@ everything, sweep parameters.  Every command takes ``--model FILE`` (a TOML mode
 docs/models.md); without it the paper's crane is used.  Run `gpme --help`.
 
 Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on stderr),
-130 Ctrl-C, 143 SIGTERM, 129 SIGHUP (gpme.signals: at every moment, compilation included).
+74 an output could not be written (disk full, read-only file system, a folder removed;
+one line naming the file and the space left), 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP
+(gpme.signals: at every moment, compilation included).
 """
 import argparse
 import sys
@@ -16,9 +18,11 @@ import numpy as np
 from gpme.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
 from gpme.out_lock import output_dir_problem
 from gpme import signals
+from gpme_core.errors import OutputWriteError
 from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Terminated)
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+EXIT_WRITE = 74         # EX_IOERR: an output could not be written (gpme_core.errors)
 CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (as verify's)
 
 
@@ -240,6 +244,8 @@ def _simulate(args):
     try:
         with exclusive_output(args.out):
             paths, rows = _simulate_models(args) if args.model else _simulate_paper(args)
+    except OutputWriteError:
+        raise                        # exit 74, gpme.cli.main
     except GpmeError as exc:
         return _error(exc)
     for p in paths.values():
@@ -263,6 +269,8 @@ def _crosscheck(args):
         if args.engine == "mujoco":
             mujoco_name_problems(scenarios)
         estimate_runs(scenarios, args.quick, args.force)
+    except OutputWriteError:
+        raise                        # exit 74, gpme.cli.main
     except GpmeError as exc:
         return _error(exc)
     from importlib import import_module
@@ -271,6 +279,8 @@ def _crosscheck(args):
     try:
         with exclusive_output(out):
             df = check.run(out, scenarios, quick=args.quick, progress=not args.no_progress)
+    except OutputWriteError:
+        raise                        # exit 74, gpme.cli.main
     except GpmeError as exc:
         return _error(exc)
     from crosscheck.reports.rows import normalise, other_rows, write_rows
@@ -417,6 +427,10 @@ def main(argv=None, ignore_late_signals=False):
     except KeyboardInterrupt as exc:
         print("interrupted; finished files kept, partial output removed", file=sys.stderr)
         return signals.exit_status(exc)
+    except OutputWriteError as exc:  # disk full, read-only, a folder removed: one line
+        print(f"error: {exc} (nothing half-written is left in place of a file; a verify "
+              "report is not published and 'latest' is unchanged)", file=sys.stderr)
+        return EXIT_WRITE
     except BrokenPipeError:          # output piped into a reader that stopped (| head)
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -4,13 +4,18 @@ import os
 import tempfile
 from pathlib import Path
 
+from .errors import OutputWriteError
+
 
 def atomic_write_bytes(path, data):
-    """Write ``data`` (bytes) to ``path`` atomically."""
+    """Write ``data`` (bytes) to ``path`` atomically.  A failure of the file system (disk
+    full, read-only, the folder removed, no permission) raises OutputWriteError naming the
+    file and the space left; the temporary file is removed and ``path`` is unchanged."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -19,9 +24,14 @@ def atomic_write_bytes(path, data):
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)   # mkstemp makes 0600; a report is for reading
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    except BaseException as exc:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass        # already moved into place, or its folder went away
+        if isinstance(exc, OSError) and not isinstance(exc, OutputWriteError):
+            raise OutputWriteError(path, exc) from None
         raise
 
 

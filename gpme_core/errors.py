@@ -47,3 +47,37 @@ class SectionWarning(UserWarning):
 class UnstableStepError(SimulationError):
     """A fixed step is above the stability limit of the model's stiffest mode (the message
     names the mode, the limit and a stable step)."""
+
+
+class OutputWriteError(GpmeError, OSError):
+    """An output file could not be written (disk full, read-only file system, a folder
+    removed mid-run, no permission).  The message names the file, the system's reason and
+    the space left where it was written; nothing half-written is left in its place.  The
+    command line ends with status 74 (EX_IOERR, docs/ci.md)."""
+
+    def __init__(self, path, cause: OSError):
+        self.path = path
+        self.cause = cause
+        super().__init__(cause.errno, f"cannot write {path}: {cause.strerror or cause}"
+                                      f"{_space_left(path)}")
+
+    def __str__(self):
+        return self.args[1] if len(self.args) > 1 else super().__str__()
+
+
+def _space_left(path) -> str:
+    """'; 12.3 kB free on /mount/dir' for the nearest existing folder of ``path`` (empty
+    when it cannot be measured)."""
+    import shutil
+    from pathlib import Path
+    folder = Path(path).absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        free = shutil.disk_usage(folder).free
+    except OSError:
+        return ""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if free >= scale:
+            return f"; {free / scale:.3g} {unit} free in {folder}"
+    return f"; {free} bytes free in {folder}"

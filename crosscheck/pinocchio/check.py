@@ -46,7 +46,7 @@ import pandas as pd
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from gpme_core.errors import ConstraintError, GpmeError, SimulationError
+from gpme_core.errors import ConstraintError, GpmeError, OutputWriteError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
@@ -335,6 +335,8 @@ def urdf_case(scenario, urdf_dir: Path) -> ModelCase:
         # frames that are a link's own frame are the URDF link itself (gpme_io.urdf_writer)
         model = with_link_frames(read_urdf(path), [f for f in original.model.frames
                                                    if link_own_frame(original.model, f)])
+    except OutputWriteError:
+        raise
     except Exception as exc:
         raise type(exc)(f"scenario {scenario.name!r}: URDF round trip: {exc}") from exc
     system = ProgrammedMotion(model, original.constraint_specs, dependent=original.dependent,
