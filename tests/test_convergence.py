@@ -148,3 +148,51 @@ def test_a_held_constraints_floor_does_not_grow_with_the_step_count():
     # the size of Phi's terms does not vanish at a zero posture (a tool 0.3 m up at q = 0)
     a = np.array([[0.0, 0.3, 0.45]])        # m/rad: lever arms of the joints
     assert phi_term_scale(a, np.zeros(3))[0] == pytest.approx(0.75)
+
+
+def _noisy(h, amplitude, seed):
+    """A run whose discretisation error (order 2) lives in t <= 0.5 s and which carries
+    round-off-like noise that grows as the step shrinks (amplitude * H / h, as eps times
+    the step count) at t > 0.5 s, where nothing else differs between the runs."""
+    rng = np.random.default_rng(seed)
+    late = T > 0.5
+    x = exact(T) + 50.0 * h ** 2 * T * ~late
+    x = x + amplitude * (H / h) * rng.standard_normal(len(T)) * late
+    df = pd.DataFrame({"t": T, "x": x})
+    df.attrs["wall_time_s"] = 0.01
+    return df
+
+
+def test_noise_below_the_bound_in_a_converging_column_passes():
+    """Differences that grow as h shrinks (r < 1) at some samples, while the column
+    converges at order 2 run-wide: noise, judged by its size (the case of Exudyn's
+    flexible crane at 250,000 steps), not an infinite error."""
+    runs = [_noisy(H / k, 2e-8, seed=k) for k in (1, 2, 4)]
+    conv = convergence(runs, ["x"], FLOOR, 2.0, FINEST)
+    assert conv.band_ok and conv.converged, conv.describe()
+    # the noisy samples are judged (resolved above the floor) and do not shrink
+    late = T > 0.5
+    d1, d2 = (np.abs(runs[k]["x"] - runs[k + 1]["x"]).to_numpy()[late] for k in (0, 1))
+    assert np.median(d1 / d2) < 1.0 and d2.min() > 10 * FLOOR["x"]
+    # without the noise rule they would read as an infinite error
+    point = local_point("x", T, np.abs(runs[0]["x"] - runs[1]["x"]).to_numpy(),
+                        np.abs(runs[1]["x"] - runs[2]["x"]).to_numpy(), 2.0, FLOOR["x"],
+                        FINEST, converges=False)
+    assert point.ratio == np.inf and point.time > 0.5
+
+
+def test_noise_above_the_bound_still_fails():
+    """The same noise 1000 x larger: above what the run-wide bound allows, a failure."""
+    runs = [_noisy(H / k, 2e-6, seed=k) for k in (1, 2, 4)]
+    conv = convergence(runs, ["x"], FLOOR, 2.0, FINEST)
+    assert not conv.converged
+    assert conv.worst.time > 0.5 and conv.worst.ratio > 1.0
+
+
+def test_a_column_that_does_not_converge_gives_its_non_shrinking_samples_no_credit():
+    """A column with no order (differences the same at every step: an error of order 0)
+    keeps the infinite extrapolated error of a sample that does not shrink."""
+    d = np.full(len(T), 1e-6)
+    point = local_point("x", T, d, d, 2.0, 1e-15, FINEST, converges=False)
+    assert point.ratio == np.inf
+    assert local_point("x", T, d, d, 2.0, 1e-15, FINEST, converges=True).ratio <= 1.0
