@@ -20,7 +20,10 @@ t = 0.01 s, on models the gates were not tuned on).
 
 Local check.  At each compared sample i, with window maxima D1_i, D2_i of d1, d2 over the
 samples i - WINDOW .. i + WINDOW (a zero crossing of the error's leading term would make a
-single sample's ratio meaningless; its neighbours carry the size of the error there), the
+single sample's ratio meaningless; its neighbours carry the size of the error there), or
+i - CROSSING_WINDOW .. i + CROSSING_WINDOW where x_h - x_h/2 or x_h/2 - x_h/4 changes sign
+within that wider window (the next error term moves the crossing between the two step
+pairs, so d1 and d2 vanish at different samples), the
 locally observed contraction r_i = D1_i / D2_i extrapolates the remaining error of the
 compared run geometrically (each further halving removes a factor r_i):
 
@@ -62,6 +65,13 @@ import numpy as np
 ORDER_TOLERANCE = 1.0    # |p_obs - p| <= 1 (the ratio within a factor 2 of 2^p)
 RESOLVED = 10.0          # a difference counts when above this many round-off floors
 WINDOW = 1               # samples each side of the local window
+# samples each side of the window at a zero crossing of the error (a sign change of
+# x_h - x_h/2 or x_h/2 - x_h/4 within it): the next error term moves the crossing between
+# the step pairs, so the two differences vanish at different samples (measured: Exudyn's
+# flexible crane n = 3, z4, d1 changes sign at 6.775 s and d2 at 6.785 s; with +-1 sample
+# the window at 6.75 s saw D1 ~ D2, "order 0.06", while the error converges at order 2
+# run-wide and at r ~ 3 on both sides of the crossing)
+CROSSING_WINDOW = 3
 FINEST, COARSEST = "finest", "coarsest"
 
 
@@ -136,18 +146,39 @@ def _window_max(d: np.ndarray, half: int = WINDOW) -> np.ndarray:
     return np.max(np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1), axis=1)
 
 
+def _sign_changes(d: np.ndarray) -> np.ndarray:
+    """(samples,) bool: d changes sign between sample i - 1 and i (zeros skipped)."""
+    s = np.sign(d)
+    out = np.zeros(len(d), dtype=bool)
+    out[1:] = s[1:] * s[:-1] < 0
+    return out
+
+
+def _local_maxima(d1: np.ndarray, d2: np.ndarray) -> tuple:
+    """(D1, D2): window maxima of |d1|, |d2| over +-WINDOW samples, and over
+    +-CROSSING_WINDOW samples where d1 or d2 (signed) changes sign within that wider window
+    (a zero crossing of the error; absolute differences carry no sign and see none)."""
+    a1, a2 = np.abs(d1), np.abs(d2)
+    flips = (_sign_changes(d1) | _sign_changes(d2)).astype(float)
+    near = _window_max(flips, CROSSING_WINDOW) > 0.0
+    wide1, wide2 = _window_max(a1, CROSSING_WINDOW), _window_max(a2, CROSSING_WINDOW)
+    return (np.where(near, wide1, _window_max(a1)), np.where(near, wide2, _window_max(a2)))
+
+
 def local_point(column: str, t: np.ndarray, d1: np.ndarray, d2: np.ndarray, order: float,
                 floor: float, compared: str, converges: bool = False) -> Optional[LocalPoint]:
     """The worst LocalPoint of one column, or None when no sample is resolved.
 
-    t (samples,) s; d1, d2 (samples,) |x_h - x_h/2|, |x_h/2 - x_h/4| in the column's unit;
+    t (samples,) s; d1, d2 (samples,) x_h - x_h/2, x_h/2 - x_h/4 in the column's unit
+    (signed: their sign changes mark the error's zero crossings; absolute values are
+    accepted and then see none);
     order: nominal p; floor: the engine's round-off (and solver) floor of the column;
     compared: FINEST (halving_gates compares the h/4 runs) or COARSEST (run_gates, h);
     converges: the column's run-wide order is in the accepted band (a sample whose
     differences do not shrink is then noise, bounded by max(D1, D2); module docstring)."""
     if len(t) == 0:
         return None
-    D1, D2 = _window_max(np.abs(d1)), _window_max(np.abs(d2))
+    D1, D2 = _local_maxima(np.asarray(d1, float), np.asarray(d2, float))
     low = 2.0 ** (order - ORDER_TOLERANCE)
     if compared == FINEST:
         bound = float(np.max(np.abs(d2))) / (low - 1.0) + floor
@@ -187,8 +218,8 @@ def convergence(runs: Sequence, columns: Sequence[str], floors: Mapping[str, flo
     worst = None
     for c in columns:
         x1, x2, x4 = (r[c].to_numpy(float) for r in runs)
-        d1, d2 = np.abs(x1 - x2), np.abs(x2 - x4)
-        m1, m2 = float(d1.max(initial=0.0)), float(d2.max(initial=0.0))
+        d1, d2 = x1 - x2, x2 - x4              # signed: local_point finds the crossings
+        m1, m2 = float(np.abs(d1).max(initial=0.0)), float(np.abs(d2).max(initial=0.0))
         p = float(np.log2(m1 / m2)) if m1 > 0 and m2 > 0 else np.nan
         f = float(floors.get(c, 0.0))
         above = m2 / f if f > 0 else np.inf
