@@ -94,3 +94,31 @@ def test_run_outputs_of_hostile_names_stay_inside(tmp_path):
         for p in paths.values():
             assert Path(p).resolve().parent == out.resolve()
     assert {p.parent for p in tmp_path.rglob("*") if p.is_file()} == {out}
+
+
+@pytest.mark.parametrize("name", ["../../../../c2esc", "../../esc#ape"])
+def test_verify_of_a_hostile_model_name_writes_only_inside_out(tmp_path, name):
+    """The issue's cases through `gpme verify --quick --only mujoco`: every file lands
+    under --out, and every plot the pages link exists (no '#' cut off a src)."""
+    import subprocess
+    import sys
+    root = Path(__file__).resolve().parents[1]
+    deep = tmp_path / "a" / "b" / "c" / "d"
+    deep.mkdir(parents=True)
+    text = (root / "examples" / "my_arm" / "my_arm.toml").read_text()
+    (deep / "m.toml").write_text(text.replace('name = "my_arm"', f'name = "{name}"', 1))
+    (deep / "my_arm.urdf").write_text((root / "examples" / "my_arm" / "my_arm.urdf").read_text())
+    before = {p for p in tmp_path.rglob("*")}
+    out = deep / "out"
+    proc = subprocess.run([sys.executable, "-m", "gpme.cli", "verify", "--quick", "--only",
+                           "mujoco", "--model", str(deep / "m.toml"), "--out", str(out),
+                           "--no-progress"], cwd=root, capture_output=True, text=True,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    new = {p for p in tmp_path.rglob("*")} - before
+    assert new and all(out in p.parents or p == out for p in new), sorted(new - {out})
+    run_dir = (out / "latest").resolve()
+    for page in run_dir.glob("*.html"):
+        for src in re.findall(r'src="([^"]+)"', page.read_text()):
+            if not src.startswith("data:"):
+                assert (run_dir / src).is_file(), (page.name, src)
