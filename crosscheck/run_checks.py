@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.elastic_loads import SMALL_ANGLE_LIMIT, STRESS_SAFETY_FACTOR, elastic_peaks
+from gpme_core.smoothness import KINK_TOL, check_run
 
 from .compare import Tolerance, compare
 
@@ -87,7 +88,31 @@ def run_rows(scenario, df, tolerances=None):
     row.update(entry=f"t = {df['t'].loc[k]:.4f} s", scale=scale,
                rel_error=abs(err) / scale if scale > 0 else np.nan)
     rows.append(row)
+    rows += smoothness_rows(scenario, df, case)
     rows += elastic_rows(scenario, df, case)
+    return rows
+
+
+# kink measure of a constraint's or programme's expression along the run
+# (gpme_core.smoothness); a failure is reported as inf: it is not an error of the step
+SMOOTH_TOL = Tolerance(KINK_TOL, 0.0, "expression smooth along the run: the change of its "
+                       "gradient between samples matches its Hessian's to 4th order in the "
+                       "sample step (gpme_core.smoothness); inf: a kink or a singular set "
+                       "(sqrt, log, division at 0) met, which no step removes")
+
+
+def smoothness_rows(scenario, df, case):
+    """One row per SymPy expression of the scenario's constraints and programmes: the
+    largest kink measure along the run, or inf with where the expression is not smooth
+    (the time and the singular set) when the run meets a kink or a singular set."""
+    rows = []
+    for check in check_run(scenario.system, df):
+        value = check.kink if check.smooth else np.inf
+        row = compare("gpme", scenario.name, f"smoothness of {check.who}", case, value, 0.0,
+                      SMOOTH_TOL)
+        row.update(entry=f"t = {check.t:.4f} s" + ("" if check.smooth else
+                                                    f" ({check.finding()})"))
+        rows.append(row)
     return rows
 
 

@@ -139,6 +139,7 @@ class SympyPointConstraint(PointConstraint):
         if problems:
             raise ModelError(problems)
         self.expr = parsed
+        self.symbols = (x, y, z, t)
         self._fast, self._careful = fns["math"], fns["numpy"]
         self.frame, self.name = frame, name
 
@@ -162,6 +163,16 @@ class SympyPointConstraint(PointConstraint):
                     "; the GPME needs phi and its first and second derivatives finite along "
                     "the motion")
         return float(v[0]), v[1:4], v[4:13].reshape(3, 3), float(v[13]), v[14:17], float(v[17])
+
+    def terms_along(self, points, times) -> np.ndarray:
+        """(k, 18) local terms (phi, grad, Hessian, phi_t, grad_t, phi_tt flat, in the order
+        of :meth:`local_terms`) at k world points (k, 3) m and times (k,) s, evaluated at
+        once by numpy; NaN where a term is not finite (gpme_core.smoothness reads a run's
+        samples with it)."""
+        pts = np.asarray(points, dtype=float)
+        return checks.evaluate_along(self._careful, (pts[:, 0], pts[:, 1], pts[:, 2],
+                                                     np.asarray(times, dtype=float)),
+                                     len(_TERM_NAMES))
 
     def non_finite_terms(self, p, t) -> str:
         """'' when every local term at (p, t) is finite, else which are not, e.g.

@@ -88,6 +88,15 @@ def non_smooth_parts(expr: sp.Basic) -> list:
 def singular_sets(expr: sp.Expr) -> list:
     """Where the parts of ``expr`` that are smooth only on part of the line are not:
     e.g. ['sqrt: where x**2 - 1 <= 0', 'division: where x - 2 = 0']."""
+    seen: dict = {}
+    return [seen.setdefault(s, s) for s, _ in singular_parts(expr) if s not in seen]
+
+
+def singular_parts(expr: sp.Expr) -> list:
+    """[(where, w), ...]: each part of ``expr`` smooth only on part of the line, in words as
+    :func:`singular_sets` gives it, with the expression w whose zero bounds that set
+    (sqrt(u), log(u), 1/u, u**r: u; asin(u), acos(u), atanh(u): 1 - u**2; acosh(u): u - 1;
+    tan(u): cos(u); atan2(y, x): x**2 + y**2).  Repeated parts are listed once."""
     out = []
     for sub in sp.preorder_traversal(expr):
         if isinstance(sub, sp.Pow):
@@ -95,30 +104,43 @@ def singular_sets(expr: sp.Expr) -> list:
             if base.is_number:
                 continue
             if not e.is_number:
-                out.append(f"power: where {base} <= 0")
+                out.append((f"power: where {base} <= 0", base))
             elif e.is_integer:
                 if e.is_negative:
-                    out.append(f"division: where {base} = 0")
+                    out.append((f"division: where {base} = 0", base))
             elif e == sp.Rational(1, 2):
-                out.append(f"sqrt: where {base} <= 0")
+                out.append((f"sqrt: where {base} <= 0", base))
             elif e == sp.Rational(-1, 2):
-                out.append(f"1/sqrt: where {base} <= 0")
+                out.append((f"1/sqrt: where {base} <= 0", base))
             else:
-                out.append(f"power {e}: where {base} <= 0")
+                out.append((f"power {e}: where {base} <= 0", base))
         elif isinstance(sub, sp.log):
-            out.append(f"log: where {sub.args[0]} <= 0")
-        elif isinstance(sub, (sp.asin, sp.acos)):
-            out.append(f"{type(sub).__name__}: where |{sub.args[0]}| >= 1")
-        elif isinstance(sub, sp.atanh):
-            out.append(f"atanh: where |{sub.args[0]}| >= 1")
+            out.append((f"log: where {sub.args[0]} <= 0", sub.args[0]))
+        elif isinstance(sub, (sp.asin, sp.acos, sp.atanh)):
+            out.append((f"{type(sub).__name__}: where |{sub.args[0]}| >= 1",
+                        1 - sub.args[0] ** 2))
         elif isinstance(sub, sp.acosh):
-            out.append(f"acosh: where {sub.args[0]} <= 1")
+            out.append((f"acosh: where {sub.args[0]} <= 1", sub.args[0] - 1))
         elif isinstance(sub, sp.tan):
-            out.append(f"tan: where cos({sub.args[0]}) = 0")
+            out.append((f"tan: where cos({sub.args[0]}) = 0", sp.cos(sub.args[0])))
         elif isinstance(sub, sp.atan2):
-            out.append(f"atan2: where {sub.args[0]} = {sub.args[1]} = 0")
+            out.append((f"atan2: where {sub.args[0]} = {sub.args[1]} = 0",
+                        sub.args[0] ** 2 + sub.args[1] ** 2))
     seen: dict = {}
-    return [seen.setdefault(s, s) for s in out if s not in seen]
+    return [seen.setdefault(p[0], p) for p in out if p[0] not in seen]
+
+
+def term_scale(w: sp.Expr) -> sp.Expr:
+    """The size of the terms ``w`` is made of: the |.| of every term of a sum, added, and of
+    every factor of a product, multiplied; so |w| / term_scale(w) is 1 without
+    cancellation and small where w's terms cancel (w near its zero relative to them)."""
+    if isinstance(w, sp.Add):
+        return sp.Add(*[term_scale(a) for a in w.args])
+    if isinstance(w, sp.Mul):
+        return sp.Mul(*[term_scale(a) for a in w.args])
+    if isinstance(w, sp.Pow) and w.exp.is_Integer and w.exp > 0:
+        return term_scale(w.base) ** w.exp
+    return sp.Abs(w)
 
 
 def why_not_finite(expr: sp.Expr, inputs) -> str:
@@ -326,6 +348,22 @@ def non_finite_text(names: Sequence[str], values: np.ndarray) -> str:
     named by ``names`` (same length)."""
     bad = np.flatnonzero(~np.isfinite(values))
     return ", ".join(f"{names[k]} = {values[k]:g}" for k in bad)
+
+
+def evaluate_along(f: Callable, args: Sequence[np.ndarray], count: int) -> np.ndarray:
+    """(k, count) values of a numpy function made by :func:`compile_expressions` at k
+    points (``args``: one (k,) float64 array per argument); NaN where a value is not finite
+    (never warns), and everywhere when evaluating raises."""
+    k = len(args[0])
+    with np.errstate(all="ignore"):
+        try:
+            values = f(*[np.asarray(a, dtype=np.float64) for a in args])
+            out = np.column_stack([np.broadcast_to(np.asarray(v, dtype=float), (k,))
+                                   for v in values]) if count else np.empty((k, 0))
+        except (ArithmeticError, ValueError, TypeError):
+            return np.full((k, count), np.nan)
+    out[~np.isfinite(out)] = np.nan
+    return out
 
 
 def format_point(p) -> str:

@@ -28,6 +28,7 @@ from .compiled import DIVERGENCE_LIMIT, for_system
 from .compiled_runs import COMPILED_METHODS, run_compiled
 from .gpme import SWITCH_RCOND, partition_rcond
 from .run_cost import estimate_run, time_evaluation
+from .singular_approach import approach
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
                         unstable_step_message)
 
@@ -178,6 +179,7 @@ def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None,
             bar.update(k + 1)
     except (SimulationError, ConstraintError) as exc:
         if partition is not None:
+            _raise_if_singular(partition.system, ts[-1], ys[-1], y0, t_end, exc)
             _raise_if_unstable(partition, dt, ts[-1], ys[-1], n, exc)
             _raise_with_singular_sets(partition.system, exc)
         raise
@@ -194,6 +196,7 @@ def _run_compiled(method, compiled, partition, t_end, y0, dt, record_every, prog
     bar = Progress(progress, int(round(t_end / dt)), t_end, method)
 
     def on_error(t_good, y_good, exc):
+        _raise_if_singular(partition.system, t_good, y_good, y0, t_end, exc)
         if method == "RK4":
             _raise_if_unstable(partition, dt, t_good, y_good, n, exc)
         _raise_with_singular_sets(partition.system, exc)
@@ -203,6 +206,20 @@ def _run_compiled(method, compiled, partition, t_end, y0, dt, record_every, prog
                             lambda t, y, step: _check_state(model, t, y, n, step), on_error)
     finally:
         bar.close()
+
+
+def _raise_if_singular(system, t_good, y_good, y0, t_end, exc):
+    """Re-raise a failed run naming the expression (constraint, programme, drive) that runs
+    into a pole or domain edge at the last recorded state (gpme_core.singular_approach),
+    before the failure is blamed on the step; else leave the original error."""
+    try:
+        cause = approach(system, float(t_good), np.asarray(y_good, dtype=float),
+                         np.asarray(y0, dtype=float), float(t_end))
+    except (ArithmeticError, ValueError, TypeError, np.linalg.LinAlgError, GpmeError):
+        return
+    if cause:
+        raise type(exc)(f"the run failed near t = {t_good:.6g} s because {cause}. The "
+                        f"failure it caused: {exc}") from None
 
 
 def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
@@ -303,7 +320,9 @@ class Progress:
 
 
 def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=None,
-           progress=False, max_wall_s=None):
+           progress=False, max_wall_s=None, last_good=None):
+    """(times, states, evaluations) of a solve_ivp run; ``last_good`` (a list, or None) is
+    set to [t, y] of the last state evaluated without an error."""
     t_eval = np.linspace(0.0, t_end, int(round(t_end / output_dt)) + 1)
     bar = Progress(progress, SCIPY_PROGRESS_UNITS, t_end, method)
     start = time.perf_counter()
@@ -318,7 +337,10 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
                 calls[1] = reached
                 bar.update(reached)
             _check_wall(start, max_wall_s, t, t_end, method)
-        return rhs(t, y)
+        dy = rhs(t, y)
+        if last_good is not None:
+            last_good[:] = [t, np.array(y)]
+        return dy
     options = {} if max_step is None else {"max_step": max_step}
     if method in IMPLICIT_METHODS:
         # structure of d(rhs)/dy: q_dot' = q_dot (identity block), q_ddot and the work
@@ -509,10 +531,13 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                       max_wall_s)
         nfev = 4 * int(round(t_end / dt))
     else:
+        last_good = [0.0, y0]
         try:
             ts, ys, nfev = _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n,
-                                  max_step=dt, progress=progress, max_wall_s=max_wall_s)
+                                  max_step=dt, progress=progress, max_wall_s=max_wall_s,
+                                  last_good=last_good)
         except (SimulationError, ConstraintError) as exc:
+            _raise_if_singular(start_system, last_good[0], last_good[1], y0, t_end, exc)
             _raise_with_singular_sets(start_system, exc)
             raise
     wall = time.perf_counter() - start

@@ -346,6 +346,11 @@ class SympyTimeFunction(TimeFunction):
             raise self._not_finite(t, dict(enumerate(v)))
         return float(v[0]), float(v[1]), float(v[2])     # finite, only their sum overflowed
 
+    def derivatives_along(self, times) -> np.ndarray:
+        """(k, 3) f, f', f'' at times (k,) s, evaluated at once by numpy; NaN where a value
+        is not finite (gpme_core.smoothness reads a run's samples with it)."""
+        return checks.evaluate_along(self._careful, (np.asarray(times, dtype=float),), 3)
+
     def _values(self, t):
         """(f, f', f'') by numpy in float64, NaN where not finite or evaluating raises."""
         with np.errstate(all="ignore"):
