@@ -211,7 +211,12 @@ def _run_compiled(method, compiled, partition, t_end, y0, dt, record_every, prog
 def _raise_if_singular(system, t_good, y_good, y0, t_end, exc):
     """Re-raise a failed run naming the expression (constraint, programme, drive) that runs
     into a pole or domain edge at the last recorded state (gpme_core.singular_approach),
-    before the failure is blamed on the step; else leave the original error."""
+    before the failure is blamed on the step; else leave the original error.  An
+    expression's own error for a value that is not finite (constraints.SympyPointConstraint,
+    time_functions.SympyTimeFunction: it names the expression, the time and where it is not
+    smooth) is raised as it is, whatever the step."""
+    if isinstance(exc, ConstraintError) and "is not finite at t =" in str(exc):
+        raise exc
     try:
         cause = approach(system, float(t_good), np.asarray(y_good, dtype=float),
                          np.asarray(y0, dtype=float), float(t_end))
