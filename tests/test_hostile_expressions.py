@@ -160,11 +160,11 @@ def test_derivative_estimate_bounds_the_real_derivatives():
 
 def test_model_file_names_the_key_of_an_explosive_expression(tmp_path):
     model = _my_arm(tmp_path, {'phi = "z - 0.3"': 'phi = "z - 9**9**9"'})
-    (_, seconds) = _timed(lambda: pytest.raises(ModelFileError, load_model_file, model))
+    start = time.perf_counter()
     with pytest.raises(ModelFileError, match=r"constraint\[1\]\.phi: 'z - 9\*\*9\*\*9': "
                                              r"9\*\*9\*\*9: a constant power"):
         load_model_file(model)
-    assert seconds < HANG_GUARD_S
+    assert time.perf_counter() - start < HANG_GUARD_S
 
 
 # ============================================================ disguised non-smooth
