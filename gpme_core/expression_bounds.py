@@ -15,15 +15,16 @@ passes and why, when
   before the power is built; nested constant powers a**b**c are evaluated only when the
   inner one is within the bound), or a number given has more,
 - a power of a coordinate or of time has an exponent above :data:`MAX_EXPONENT`,
-- a combinatorial function (factorial, gamma, binomial, ...) of a number above
-  :data:`MAX_COMBINATORIAL_ARGUMENT` is asked for,
+- a function is applied to a constant above 10**MAX_CONSTANT_DIGITS (``sin(exp(exp(
+  exp(5))))``: reducing it modulo 2 pi needs 1e64 digits), or a combinatorial function
+  (factorial, gamma, binomial, ...) to a number above :data:`MAX_COMBINATORIAL_ARGUMENT`,
 - or the product-rule estimate of its second derivatives (:func:`derivative_nodes`) is
   above :data:`MAX_DERIVATIVE_NODES`.
 
-The model-file reader (gpme_io.modelfile.expressions) applies :func:`power_problem` and
-:func:`constant_problem` while it converts the text's syntax tree; the Python API
-(gpme_core.expression_checks.read_expression) reads a string without evaluating it and
-rebuilds it node by node with :func:`evaluate_bounded`.  Both check
+The model-file reader (gpme_io.modelfile.expressions) applies :func:`power_problem`,
+:func:`constant_problem` and :func:`function_problem` while it converts the text's syntax
+tree; the Python API (gpme_core.expression_checks.read_expression) reads a string without
+evaluating it and rebuilds it node by node with :func:`evaluate_bounded`.  Both check
 :func:`derivative_problem` before differentiating.
 """
 import math
@@ -175,18 +176,28 @@ def power_problem(base: sp.Basic, exponent: sp.Basic) -> Optional[str]:
 
 
 def function_problem(func, args) -> Optional[str]:
-    """None, or why a combinatorial function (factorial, gamma, binomial, ...) of a number
-    above :data:`MAX_COMBINATORIAL_ARGUMENT` must not be evaluated."""
-    if not str(getattr(func, "__module__", "")).startswith(_COMBINATORIAL_MODULES):
-        return None
+    """None, or why ``func`` must not be applied to its (built, bounded) ``args``: a
+    constant argument above 10**MAX_CONSTANT_DIGITS (sin, cos, tan of such a number need as
+    many digits of pi to evaluate, and SymPy's evalf does not finish), or a combinatorial
+    function (factorial, gamma, binomial, ...) of a number above
+    :data:`MAX_COMBINATORIAL_ARGUMENT`."""
+    combinatorial = str(getattr(func, "__module__", "")).startswith(_COMBINATORIAL_MODULES)
     for a in args:
-        if isinstance(a, sp.Expr) and a.is_number:
-            m = _log10_abs(a)
-            if m is not None and m > math.log10(MAX_COMBINATORIAL_ARGUMENT):
-                return (f"{func.__name__}() of a number about 10**{m:.3g}; "
-                        f"combinatorial functions are evaluated only up to "
-                        f"{MAX_COMBINATORIAL_ARGUMENT} ({MAX_COMBINATORIAL_ARGUMENT}! has "
-                        "2568 digits, beyond float64)")
+        if not (isinstance(a, sp.Expr) and a.is_number):
+            continue
+        m = _log10_abs(a)
+        if m is None:
+            continue
+        name = getattr(func, "__name__", str(func))
+        if m > MAX_CONSTANT_DIGITS:
+            return (f"{name}() of a constant of about 10**{_about(m)}; constant arguments "
+                    f"are limited to 10**{MAX_CONSTANT_DIGITS} (float64 ends at 1.8e308, "
+                    "and a periodic function of such a number needs as many digits of pi to "
+                    "evaluate)")
+        if combinatorial and m > math.log10(MAX_COMBINATORIAL_ARGUMENT):
+            return (f"{name}() of a number about 10**{m:.3g}; combinatorial functions "
+                    f"are evaluated only up to {MAX_COMBINATORIAL_ARGUMENT} "
+                    f"({MAX_COMBINATORIAL_ARGUMENT}! has 2568 digits, beyond float64)")
     return None
 
 

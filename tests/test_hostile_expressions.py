@@ -78,6 +78,9 @@ EXPLOSIVE = [
      ["its second derivatives would have about", "at most 50,000",
       "fewer nested functions or factors"]),
     ("sin(" * 40 + "x*y*z*t" + ")" * 40, ["its second derivatives would have about"]),
+    ("x*sin(exp(exp(exp(5))))", ["sin(exp(exp(exp(5)))): sin() of a constant of about "
+                                 "10**1.2e64; constant arguments are limited to 10**400"]),
+    ("x*exp(exp(exp(10)))", ["exp() of a constant of about 10**9566"]),
 ]
 
 
@@ -100,6 +103,7 @@ API_EXPLOSIVE = [
     ("x + binomial(10**9, 10**8)", ["binomial() of a number"]),
     ("(x + 1)**1001", ["the exponent 1001 of a coordinate or time is above 1000"]),
     ("E**(10**9)*x", ["E**(10**9): a constant power with about 4.3e8 digits"]),
+    ("x*cos(exp(exp(exp(5))))", ["cos() of a constant of about 10**1.2e64"]),
     ("-" * 3000 + "x", ["nested more than 100 deep"]),
     ("sin(" * 2000 + "x" + ")" * 2000, ["cannot read", "too many nested parentheses"]),
     ("*".join(f"cos(x + {k}*y - z)" for k in range(1, 25)),

@@ -163,7 +163,9 @@ def _convert(node: ast.AST, symbols: Mapping[str, str], source: str) -> sp.Expr:
         if len(node.args) != arity:
             raise _Refused(f"{name}() takes {arity} argument{'s' if arity > 1 else ''}, "
                            f"got {len(node.args)}")
-        return fn(*[_convert(a, symbols, source) for a in node.args])
+        args = [_convert(a, symbols, source) for a in node.args]
+        _bounded(bounds.function_problem(fn, args), node, source)
+        return fn(*args)
     if isinstance(node, ast.Attribute):
         raise _Refused(f"attribute access ('.{node.attr}') is not allowed")
     if isinstance(node, (ast.Compare, ast.BoolOp, ast.IfExp)):
