@@ -75,9 +75,11 @@ def tree_problem(expr: sp.Basic) -> Optional[str]:
     return shape_problem(depth, nodes)
 
 
-def shape(root, children) -> tuple:
+def shape(root, children, same_level=None) -> tuple:
     """(depth, nodes) of a tree given its ``children(node)``, without recursion; stops
-    counting once either passes its bound."""
+    counting once either passes its bound.  ``same_level(parent, child)``: True where the
+    child does not nest deeper (a + b + c parsed as (a + b) + c is one flat sum, as SymPy
+    builds it)."""
     stack, depth, nodes = [(root, 1)], 0, 0
     while stack:
         node, d = stack.pop()
@@ -85,7 +87,8 @@ def shape(root, children) -> tuple:
         depth = max(depth, d)
         if depth > MAX_DEPTH or nodes > MAX_NODES:
             break
-        stack.extend((c, d + 1) for c in children(node))
+        stack.extend((c, d if same_level is not None and same_level(node, c) else d + 1)
+                     for c in children(node))
     return depth, nodes
 
 
@@ -215,7 +218,7 @@ def evaluate_bounded(expr: sp.Basic) -> sp.Basic:
     if isinstance(expr, sp.Pow):
         problem = power_problem(args[0], args[1])
     elif isinstance(expr, sp.Mul):
-        problem = _product_problem(args)
+        problem = product_problem(args)
     else:
         problem = function_problem(expr.func, args)
     if problem:
@@ -227,7 +230,9 @@ def evaluate_bounded(expr: sp.Basic) -> sp.Basic:
     return built
 
 
-def _product_problem(args) -> Optional[str]:
+def product_problem(args) -> Optional[str]:
+    """None, or why the product of ``args`` must not be built: its exact constant factors
+    have more than twice :data:`MAX_CONSTANT_DIGITS` digits together."""
     total = sum(digits(a) for a in args)
     if total > 2 * MAX_CONSTANT_DIGITS:
         return (f"a product of constants of about {_about(total)} digits; exact "

@@ -144,7 +144,9 @@ def test_bounds_accept_what_models_need():
     """Powers, roots and products that stay small are built as SymPy builds them."""
     for text in ("x**(1/3) + (x + 1)**1000 - 2**0.5", "9**9*x", "(x/3)**100",
                  "x**x**x", "1**9**9*z", "sqrt(" * 60 + "x**2 + 1" + ")" * 60,
-                 "(y - 0.11)*cos(2*pi*t/4) - (x - 0.5)*sin(2*pi*t/4)"):
+                 "(y - 0.11)*cos(2*pi*t/4) - (x - 0.5)*sin(2*pi*t/4)",
+                 " + ".join(f"{k}*x**2" for k in range(1, 400)),    # a flat sum, not nested
+                 "x" + "*y/2" * 200):
         (expr, problems), seconds = _timed(lambda: file_expressions.parse_expression(text, POINT))
         assert problems == [] and expr is not None, (text, problems)
         assert seconds < HANG_GUARD_S

@@ -80,7 +80,7 @@ def parse_expression(text: object, symbols: Mapping[str, str]) -> tuple:
         return None, [f"{text!r} is not an expression ({exc.msg} at column {exc.offset})"]
     except (RecursionError, MemoryError):
         return None, [f"{_shown(text)}: {bounds.shape_problem(bounds.MAX_DEPTH + 1, 0)}"]
-    shape = bounds.shape_problem(*bounds.shape(tree.body, ast.iter_child_nodes))
+    shape = bounds.shape_problem(*bounds.shape(tree.body, _operands, _same_chain))
     if shape:
         return None, [f"{_shown(text)}: {shape}"]
     try:
@@ -136,15 +136,13 @@ def _convert(node: ast.AST, symbols: Mapping[str, str], source: str) -> sp.Expr:
         if isinstance(op, (ast.Mod, ast.FloorDiv)):
             raise _Refused(f"the operator {_op_text(op)!r} is not smooth ({NON_SMOOTH['Mod']}); "
                            + _SMOOTH_HINT)
-        ops = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b,
-               ast.Mult: lambda a, b: a * b, ast.Div: lambda a, b: a / b,
-               ast.Pow: lambda a, b: a ** b}
-        if type(op) not in ops:
+        if type(op) in _CHAIN:
+            return _convert_chain(node, symbols, source)
+        if not isinstance(op, ast.Pow):
             raise _Refused(f"the operator {_op_text(op)!r} is not allowed; use + - * / **")
         left, right = _convert(node.left, symbols, source), _convert(node.right, symbols, source)
-        if isinstance(op, ast.Pow):
-            _bounded(bounds.power_problem(left, right), node, source)
-        out = ops[type(op)](left, right)
+        _bounded(bounds.power_problem(left, right), node, source)
+        out = left ** right
         _bounded(bounds.constant_problem(out), node, source)
         return out
     if isinstance(node, ast.Call):
@@ -174,6 +172,47 @@ def _convert(node: ast.AST, symbols: Mapping[str, str], source: str) -> sp.Expr:
     raise _Refused(f"{type(node).__name__} is not allowed; write numbers, "
                    f"{describe_symbols(symbols)}, pi, E, + - * / ** and the functions "
                    f"{', '.join(FUNCTIONS)}")
+
+
+# a + b - c and a * b / c: chains parsed as nested pairs ((a + b) - c) that SymPy builds
+# as one flat sum or product; converted along their left spine without recursion
+_CHAIN = {ast.Add: "sum", ast.Sub: "sum", ast.Mult: "product", ast.Div: "product"}
+
+
+def _operands(node: ast.AST) -> list:
+    """The subexpressions of ``node`` (not its operator and context nodes): what the bound
+    on expression size counts."""
+    return [c for c in ast.iter_child_nodes(node) if isinstance(c, ast.expr)]
+
+
+def _same_chain(parent: ast.AST, child: ast.AST) -> bool:
+    """Whether ``child`` continues ``parent``'s sum or product (no deeper nesting)."""
+    return (isinstance(parent, ast.BinOp) and isinstance(child, ast.BinOp)
+            and _CHAIN.get(type(parent.op)) is not None
+            and _CHAIN.get(type(parent.op)) == _CHAIN.get(type(child.op)))
+
+
+def _convert_chain(node: ast.BinOp, symbols: Mapping[str, str], source: str) -> sp.Expr:
+    """One SymPy Add or Mul of a chain of + and - (or * and /), its operands bounded; the
+    product's exact constants are bounded before it is built."""
+    family, spine, first = _CHAIN[type(node.op)], [], node
+    while isinstance(node, ast.BinOp) and _CHAIN.get(type(node.op)) == family:
+        spine.append(node)
+        node = node.left
+    terms = [_convert(node, symbols, source)]
+    for link in reversed(spine):
+        operand = _convert(link.right, symbols, source)
+        if isinstance(link.op, ast.Sub):
+            operand = -operand
+        elif isinstance(link.op, ast.Div):
+            operand = sp.Pow(operand, -1)
+        _bounded(bounds.constant_problem(operand), link, source)
+        terms.append(operand)
+    if family == "product":
+        _bounded(bounds.product_problem(terms), first, source)
+    out = sp.Add(*terms) if family == "sum" else sp.Mul(*terms)
+    _bounded(bounds.constant_problem(out), first, source)
+    return out
 
 
 def _shown(text: str) -> str:
