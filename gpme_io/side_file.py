@@ -24,12 +24,10 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Optional
 
-import numpy as np
-
 from gpme_core import time_functions
 from gpme_core.errors import ModelError, ModelFileError, SectionWarning
-from gpme_core.model import STANDARD_GRAVITY, Model
-from gpme_core.rfem import BeamProperties
+from gpme_core.model import Model
+from gpme_core.rfem import MAX_SEGMENTS, BeamProperties
 
 from .input_files import SIDE_FILE_LIMIT, InputFileError, read_input_file
 
@@ -275,8 +273,10 @@ def _check_flexible(rec: Any, label: str, k: int, bad: list) -> None:
         bad.append(f"{where}: missing {', '.join(missing)} (a record has "
                    f"{', '.join(FLEXIBLE_KEYS)})")
     n = rec.get("n_segments")
-    if "n_segments" in rec and (not isinstance(n, int) or isinstance(n, bool) or n < 0):
-        bad.append(f"{where}: n_segments must be an integer >= 0, got {_show(n)}")
+    if "n_segments" in rec and (not isinstance(n, int) or isinstance(n, bool)
+                                or not 0 <= n <= MAX_SEGMENTS):
+        bad.append(f"{where}: n_segments must be an integer from 0 to {MAX_SEGMENTS}, "
+                   f"got {_show(n)}")
     for key, what in (("joints", "joint"), ("links", "link")):
         v = rec.get(key)
         if key in rec and not (isinstance(v, list)

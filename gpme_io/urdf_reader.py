@@ -29,7 +29,6 @@ extension tags, friction and actuator limits.  What it does, in order (docs/urdf
 Every problem, from every stage (XML, side file, inertials, joints, chain, frozen values,
 flexible specs, the built model), comes in one :class:`gpme_core.errors.ModelFileError`.
 """
-import dataclasses
 import math
 import xml.etree.ElementTree as ET
 from collections import Counter, deque
@@ -41,13 +40,12 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 from numpy.typing import NDArray
 
-from gpme_core import time_functions
 from gpme_core import transforms as tf
 from gpme_core.errors import ModelError, ModelFileError
 from gpme_core.inertia import RigidBodyInertia
 from gpme_core.model import (MIN_AXIS_LENGTH, PRISMATIC, REVOLUTE, STANDARD_GRAVITY,
                              ChainBuilder, FlexibleLinkInfo, Model, validate_model)
-from gpme_core.rfem import BeamProperties, BeamSection
+from gpme_core.rfem import MAX_SEGMENTS, BeamProperties, BeamSection
 
 from .input_files import URDF_LIMIT, InputFileError, read_input_file
 from .side_file import check_side_file, drive_function, read_side_file, side_file_path
@@ -778,7 +776,7 @@ def _frozen_values(tree, joints, chain_joints, above, frozen, problems, notes):
         notes.line("mimic joints off the chain frozen where they follow the joint they mimic "
                    "(multiplier * value + offset): " + "; ".join(mimicked))
     if unsupported:
-        notes.line(f"floating/planar joints off the chain frozen at their origin: "
+        notes.line("floating/planar joints off the chain frozen at their origin: "
                    + ", ".join(unsupported))
     return values
 
@@ -804,8 +802,10 @@ def _beam_plan(name, spec, t_next, problems):
     if isinstance(spec, tuple) and len(spec) == 2 and isinstance(spec[0], BeamProperties):
         beam, n = spec
         bad = beam.problems(label)
-        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
-            bad.append(f"{label}: n_segments must be an integer >= 0, got {n!r}")
+        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) \
+                or not 0 <= n <= MAX_SEGMENTS:
+            bad.append(f"{label}: n_segments must be an integer from 0 to {MAX_SEGMENTS}, "
+                       f"got {n!r}")
         problems.extend(bad)
         return None if bad else (beam, int(n), np.eye(4))
     if not isinstance(spec, FlexibleLink):
@@ -817,8 +817,10 @@ def _beam_plan(name, spec, t_next, problems):
         bad.append(f"{label}: section must be a gpme_core.rfem.BeamSection (solid_circle, "
                    f"tube, rectangle), got {type(spec.section).__name__}")
     n = spec.n_segments
-    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 0:
-        bad.append(f"{label}: n_segments must be an integer >= 0, got {n!r}")
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) \
+            or not 0 <= n <= MAX_SEGMENTS:
+        bad.append(f"{label}: n_segments must be an integer from 0 to {MAX_SEGMENTS}, "
+                   f"got {n!r}")
     p = None if t_next is None else t_next[:3, 3]
     if spec.axis is not None:
         x = _vector(spec.axis, f"{label} axis", bad)

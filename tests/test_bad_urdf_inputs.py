@@ -218,7 +218,7 @@ CASES = [
     ("side-flexible-record-incomplete", ARM_TEXT,
      side(flexible_links=[{"name": "forearm", "n_segments": -1}]),
      ["flexible link record 'forearm' (flexible_links #1): missing beam, joints, links",
-      "n_segments must be an integer >= 0, got -1"]),
+      "n_segments must be an integer from 0 to 1000, got -1"]),
     ("side-key-given-twice", ARM_TEXT,
      '{"format": "gpme-urdf-side-file", "version": 1, "joints": {"shoulder": '
      '{"stiffness": 1.0, "stiffness": -1.0}}}',

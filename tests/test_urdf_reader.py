@@ -342,7 +342,7 @@ def test_flexible_spec_problems_are_listed_together():
     msg = str(exc.value)
     for expected in ("flexible link 'arm': it is the chain tip (no next chain joint): give "
                      "axis= (unit, link frame) and length= (m)",
-                     "flexible link 'column': n_segments must be an integer >= 0, got 1.5",
+                     "flexible link 'column': n_segments must be an integer from 0 to 1000, got 1.5",
                      "flexible link 'column': axis must be a unit vector in the link frame, "
                      "got [0.0, 0.0, 2.0]",
                      "flexible link 'column': youngs_modulus must be positive and finite (Pa), "
