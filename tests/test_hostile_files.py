@@ -40,7 +40,8 @@ from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, SWEEP_FILE_L
                                  URDF_LIMIT, InputFileError, read_input_file)
 from gpme_io.modelfile import load_model_file, read_model_file
 from gpme_io.side_file import load_side_file
-from gpme_io.urdf_reader import _subtree_joints, _Tree, load_urdf, parse_urdf
+from gpme_io.urdf_read.tree import _subtree_joints, _Tree
+from gpme_io.urdf_reader import load_urdf, parse_urdf
 from gpme_io.urdf_writer import urdf_documents
 from gpme_io.xml_text import (NOT_XML_CHAR, comment_text, make_tree_safe, xml_comment,
                               xml_safe_text)
