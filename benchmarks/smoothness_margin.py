@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from gpme.runs import simulate_scenario
+from gpme_io.runs import simulate_scenario
 from gpme_core.constraints import SympyPointConstraint
 from gpme_core.expression_checks import evaluate_along, singular_parts, term_scale
 from gpme_core.smoothness import KINK_TOL, REACH_TOL, check_run

@@ -346,7 +346,7 @@ def constraint_kind(spec) -> str:
 # ----------------------------------------------------------------------------- runs
 def run_example(scenario, t_end: Optional[float] = None, compiled: bool = True):
     """History DataFrame of the scenario's quick run (or its first ``t_end`` s) with gpme,
-    run as gpme.runs.simulate_scenario runs it: the scenario's integrator, step (RK4:
+    run as gpme_io.runs.simulate_scenario runs it: the scenario's integrator, step (RK4:
     the scenario's, else suggest_rk4_step at q0) and output spacing.  compiled=False runs
     RK4 on the Python reference path (no numba compilation; same motion to round-off)."""
     t_run = scenario.quick_t_end if t_end is None else min(float(t_end), scenario.quick_t_end)

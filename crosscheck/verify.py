@@ -35,8 +35,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from gpme.out_lock import exclusive_output, output_file_problem
 from gpme_core.errors import OutputWriteError
+from gpme_io.modelfile import load_model_files
+from gpme_io.out_lock import exclusive_output, output_file_problem
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .engines import missing_message
@@ -104,8 +105,8 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
 
 def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     """Each scenario's own gpme run: history, figures and the run checks."""
-    from gpme.accurate_step import run_accurately
-    from gpme.runs import simulate_scenario, write_run_outputs
+    from crosscheck.accurate_step import run_accurately
+    from gpme_io.runs import simulate_scenario, write_run_outputs
     from .run_checks import rows_frame, run_rows
     rows, rfem_rows = [], []
     for scenario in scenarios:
@@ -121,7 +122,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
 
         if scenario.integrator == "RK4":
             # the step `gpme simulate` chooses: halved until the run's own checks pass
-            # (gpme/accurate_step.py), so both commands judge the same run
+            # (crosscheck/accurate_step.py), so both commands judge the same run
             choice = run_accurately(run, checks, report=lambda line: _say(f"    {line}"),
                                     start="the model file's step")
             df, scenario_rows = choice.df, choice.rows
@@ -495,9 +496,9 @@ def _point_latest(root, run_id):
 
 def estimate_runs(scenarios, quick, force):
     """Print the estimated cost of the gpme runs of a verification before any work, and
-    refuse (gpme.budget.BudgetError) one above the limits unless ``force``; an input problem
+    refuse (gpme_io.budget.BudgetError) one above the limits unless ``force``; an input problem
     found on the way (an unstable step in a model file, say) is raised here too."""
-    from gpme.budget import run_budget
+    from gpme_io.budget import run_budget
     _say("estimated cost of the gpme runs (the engine steps take about as long again):")
     if scenarios is None:
         from gpme_examples import paper
@@ -507,7 +508,7 @@ def estimate_runs(scenarios, quick, force):
             run_budget(f"the paper's {case} crane", force)(
                 paper.run_case(case, t_end=t_end, estimate_only=True))
         return
-    from gpme.runs import simulate_scenario
+    from gpme_io.runs import simulate_scenario
     for scenario in scenarios:
         _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
         run_budget(scenario.name, force)(simulate_scenario(scenario, quick=quick,
@@ -576,17 +577,16 @@ def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
 def main(args, problems=()):
     """`gpme verify`: ``problems`` found by the caller (--out, --keep) are listed with the
     report flags' and the model files' in one message (exit 2)."""
-    from gpme.budget import wall_limit
+    from gpme_io.budget import wall_limit
     from gpme_core.errors import GpmeError
     scenarios = None
     problems = list(problems) + flag_problems(args)
     if getattr(args, "model", None):
-        from gpme.cli import load_scenarios
         try:
-            scenarios = load_scenarios(args.model)
+            scenarios = load_model_files(args.model)
             if getattr(args, "only", None) in (None, "mujoco"):
-                from gpme.cli import mujoco_name_problems
-                mujoco_name_problems(scenarios)
+                from .mujoco.names import scenario_name_problems
+                scenario_name_problems(scenarios)
         except GpmeError as exc:
             problems.append(str(exc))
     only = STEP_ALIASES.get(getattr(args, "only", None), getattr(args, "only", None))

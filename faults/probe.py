@@ -4,7 +4,7 @@
 
 For the crane (rigid and 3-segment flexible, gpme_io.scenario.crane_scenario) and each model
 file, integrates the first ``--t-end`` seconds from the scenario's initial state with its
-own integrator and step (gpme.runs.simulate_scenario) and saves, per scenario, the columns
+own integrator and step (gpme_io.runs.simulate_scenario) and saves, per scenario, the columns
 the compiled loop integrates: every coordinate, its velocity and the three work integrals
 (W_dissipated, W_drive, W_reaction).  A planted fault that changes these has changed what
 the compiled loops compute, whatever the numpy reference does.
@@ -53,7 +53,7 @@ def main(argv=None):
     import gpme
     import gpme_core
     import gpme_io
-    from gpme.runs import simulate_scenario
+    from gpme_io.runs import simulate_scenario
     record = {"imported": {m.__name__: m.__file__ for m in (gpme_core, gpme, gpme_io,
                                                             crosscheck)},
               "sys_path0": sys.path[0], "runs": {}}

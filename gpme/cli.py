@@ -15,11 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from gpme.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
-from gpme.out_lock import output_dir_problem
 from gpme import signals
-from gpme_core.errors import OutputWriteError
 from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Terminated)
+from gpme_core.errors import OutputWriteError
+from gpme_core.methods import FIXED_STEP_METHODS, METHODS
+from gpme_io.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
+from gpme_io.modelfile import load_model_files
+from gpme_io.out_lock import output_dir_problem
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EXIT_WRITE = 74         # EX_IOERR: an output could not be written (gpme_core.errors)
@@ -29,40 +31,6 @@ CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (a
 def _error(msg):
     print(f"error: {msg}", file=sys.stderr)
     return EXIT_USAGE
-
-
-def load_scenarios(paths):
-    """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each; two
-    files whose models have the same name are refused: their outputs would overwrite each
-    other)."""
-    from gpme_core.errors import ModelFileError
-    from gpme_io.modelfile import load_model_file
-    scenarios = [load_model_file(Path(p)) for p in paths]
-    seen = {}
-    problems = []
-    for path, scenario in zip(paths, scenarios):
-        if scenario.name in seen:
-            problems.append(f"{path} and {seen[scenario.name]} both name their model "
-                            f"{scenario.name!r} ([model] name); their outputs would "
-                            "overwrite each other: give each model file its own name, or "
-                            "each file once")
-        seen.setdefault(scenario.name, path)
-    if problems:
-        raise ModelFileError(problems)
-    return scenarios
-
-
-def mujoco_name_problems(scenarios):
-    """Raise ModelError (before any work) listing the names of ``scenarios`` that MuJoCo
-    cannot take (repeated in one of its namespaces, empty, not XML characters:
-    crosscheck.mujoco.mjcf.name_problems)."""
-    from crosscheck.mujoco.cases import programme
-    from crosscheck.mujoco.mjcf import name_problems
-    from gpme_core.errors import ModelError
-    problems = [f"{s.name}: {p}" for s in scenarios
-                for p in name_problems(s.model, programme(s))]
-    if problems:
-        raise ModelError(problems)
 
 
 # failed checks named in the closing summary line of `gpme simulate` (the others counted)
@@ -100,8 +68,8 @@ def _print_checks(rows):
 
 def _run_checked(label, run, checks, estimate, accurate, force, start):
     """(history, check rows) of one model: with ``accurate`` (RK4 without --dt) the run at
-    the step gpme.accurate_step chooses, else ``run(None)`` as given; its checks printed."""
-    from gpme.accurate_step import run_accurately
+    the step crosscheck.accurate_step chooses, else ``run(None)`` as given; its checks printed."""
+    from crosscheck.accurate_step import run_accurately
     if accurate:
         choice = run_accurately(run, checks, estimate=estimate, force=force, start=start,
                                 report=lambda line: print(f"  {line}", flush=True))
@@ -118,7 +86,7 @@ def checks_summary(rows):
     """The closing line of `gpme simulate`: the counts of passed, failed and information
     checks, and the failed ones (at most SUMMARY_FAILURES, the worst first, each with its
     worst value, where, and its tolerance)."""
-    from gpme.accurate_step import gated_errors
+    from crosscheck.accurate_step import gated_errors
     failed = [r for r in rows if r["status"] == "fail"]
     counts = (f"{sum(r['status'] == 'pass' for r in rows)} pass, {len(failed)} fail, "
               f"{sum(r['status'] == 'info' for r in rows)} information")
@@ -135,7 +103,7 @@ def checks_summary(rows):
 def _simulate_paper(args):
     """The paper's two crane runs with the paper's figures (no --model), each judged by the
     same checks as a model file's run (crosscheck.run_checks)."""
-    from gpme.budget import run_budget, wall_limit
+    from gpme_io.budget import run_budget, wall_limit
     from gpme_examples import paper
     from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
@@ -172,10 +140,10 @@ def _simulate_paper(args):
 
 
 def _simulate_models(args):
-    from gpme.budget import run_budget, wall_limit
-    from gpme.runs import simulate_scenario, write_run_outputs
+    from gpme_io.budget import run_budget, wall_limit
+    from gpme_io.runs import simulate_scenario, write_run_outputs
     paths, rows = {}, []
-    for scenario in load_scenarios(args.model):
+    for scenario in load_model_files(args.model):
         t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
         print(f"simulating {scenario.name}: {scenario.model.n_coordinates} coordinates, "
               f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
@@ -237,10 +205,10 @@ def _simulate(args):
     if problems:
         return _error("; ".join(problems) if len(problems) == 1
                       else f"{len(problems)} problems:\n  " + "\n  ".join(problems))
-    if args.dt is not None and args.method not in (None, "RK4", "RadauIIA"):
+    if args.dt is not None and args.method not in (None,) + FIXED_STEP_METHODS:
         print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
               "(its steps follow its error control)", flush=True)
-    from gpme.out_lock import exclusive_output
+    from gpme_io.out_lock import exclusive_output
     try:
         with exclusive_output(args.out):
             paths, rows = _simulate_models(args) if args.model else _simulate_paper(args)
@@ -260,14 +228,15 @@ def _crosscheck(args):
         return _error(output_dir_problem(args.out))
     from crosscheck.engines import missing_message
     from crosscheck.verify import default_scenarios, estimate_runs
-    from gpme.out_lock import exclusive_output
+    from gpme_io.out_lock import exclusive_output
     if missing_message(args.engine):
         return _error(missing_message(args.engine))
     try:
-        scenarios = load_scenarios(args.model) if args.model else default_scenarios(
+        scenarios = load_model_files(args.model) if args.model else default_scenarios(
             args.engine, args.quick)
         if args.engine == "mujoco":
-            mujoco_name_problems(scenarios)
+            from crosscheck.mujoco.names import scenario_name_problems   # loads MuJoCo
+            scenario_name_problems(scenarios)
         estimate_runs(scenarios, args.quick, args.force)
     except OutputWriteError:
         raise                        # exit 74, gpme.cli.main
@@ -343,7 +312,7 @@ def build_parser():
                           f"most {MAX_STEP_HALVINGS} times (docs/runs.md); RadauIIA's fixed "
                           "step (default 1 ms); "
                           "with an adaptive --method its largest step")
-    sim.add_argument("--method", choices=("RK4", "RadauIIA", "RK45", "DOP853", "Radau"),
+    sim.add_argument("--method", choices=METHODS,
                      default=None,
                      help="RK4 (explicit, fixed step), RadauIIA (implicit order 5, fixed "
                           "step, default 1 ms: for flexible models whose stiff RFEM modes "

@@ -12,8 +12,9 @@ from . import kernels
 from .compiled import DIVERGENCE_LIMIT, single_threaded_blas
 from .errors import ConstraintError, SimulationError
 from .gpme import partition_rcond
+from .methods import RADAU_IIA, RK4
 
-COMPILED_METHODS = {"RK4": "rk4_advance", "RadauIIA": "radau_advance"}
+COMPILED_METHODS = {RK4: "rk4_advance", RADAU_IIA: "radau_advance"}   # kernels' loops
 # Newton's stage equations count as solved when the largest increment of a stage velocity,
 # relative to 1 + |velocity|, is below this.  A stage velocity wrong by 1e-10 rad/s moves a
 # position by h x 1e-10 per step: at most 1e-9 rad over 10^4 steps even if every step's

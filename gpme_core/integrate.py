@@ -27,6 +27,8 @@ from .errors import (ConstraintError, GpmeError, ModelError, SimulationError,
 from .compiled import DIVERGENCE_LIMIT, for_system
 from .compiled_runs import COMPILED_METHODS, run_compiled
 from .gpme import SWITCH_RCOND, partition_rcond
+from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_METHODS,
+                      METHODS)
 from .run_cost import estimate_run, time_evaluation
 from .singular_approach import approach
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
@@ -34,12 +36,9 @@ from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jaco
 
 log = logging.getLogger("gpme.integrate")
 
-METHODS = ("RK4", "RadauIIA", "RK45", "DOP853", "Radau")
-FIXED_STEP_METHODS = ("RK4", "RadauIIA")
 # s, RadauIIA's step when none is given: resolves motions up to ~30 Hz to about 1e-6 of
 # their amplitude per second of run (order 5; docs/benchmarks.md measures the flexible crane)
 RADAU_IIA_STEP = 1e-3
-IMPLICIT_METHODS = ("Radau",)
 N_WORK = 3
 # entries of the state named in a divergence message
 MESSAGE_ENTRIES = 6
@@ -500,7 +499,7 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                                            compiled=compiled)[1]
     limit = None
     if method == "RK4" and (dt is None or check_step) or (
-            before_run is not None and method in ("RK45", "DOP853")):
+            before_run is not None and method in EXPLICIT_ADAPTIVE_METHODS):
         limit, mode = rk4_limit(start_system, 0.0, q0, q_dot0)
     if method == "RK4":
         if dt is None:
@@ -519,7 +518,7 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
         if seconds_per_eval is None:
             seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False,
                                                compiled=compiled)[1]
-        if limit is None and method in ("RK45", "DOP853"):
+        if limit is None and method in EXPLICIT_ADAPTIVE_METHODS:
             limit = rk4_limit(start_system, 0.0, q0, q_dot0)[0]
         cost = estimate_run(method, t_end, output_dt, n, history_columns(start_system),
                             seconds_per_eval, dt=dt, stable_step=limit)

@@ -14,11 +14,13 @@ from typing import Optional
 
 import numpy as np
 
+from .methods import DOP853, EXPLICIT_ADAPTIVE_METHODS, RADAU, RADAU_IIA, RK4, RK45
+
 # evaluations of the right-hand side per step of each method
 # RadauIIA: 3 stages x 2-3 Newton passes plus a Jacobian (2n + 1 evaluations) every ~30
 # steps: measured 9.2 evaluations per step on the flexible crane (n_rfe = 5, dt = 1 ms);
 # not exact
-STAGES = {"RK4": 4, "RadauIIA": 9, "RK45": 6, "DOP853": 12, "Radau": 3}
+STAGES = {RK4: 4, RADAU_IIA: 9, RK45: 6, DOP853: 12, RADAU: 3}
 # CSV bytes per value: '%.17g' of a double is at most 24 characters plus the separator
 CSV_BYTES_PER_VALUE = 25
 # the history in memory: the integrated states (float64) and the DataFrame built from them
@@ -191,7 +193,7 @@ def estimate_run(method, t_end, output_dt, n_coordinates, columns, seconds_per_e
         steps, exact = int(round(t_end / dt)), True
     elif method == "RadauIIA":
         steps, exact = int(round(t_end / dt)), False
-    elif method in ("RK45", "DOP853"):
+    elif method in EXPLICIT_ADAPTIVE_METHODS:
         longest = min(x for x in (dt, stable_step, np.inf) if x is not None)
         steps = int(np.ceil(t_end / longest)) if np.isfinite(longest) else 1
         exact = False

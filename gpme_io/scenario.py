@@ -19,9 +19,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gpme_core.gpme import ProgrammedMotion
+from gpme_core.methods import METHODS
 from gpme_core.model import Model
 
-INTEGRATORS = ("RK4", "RadauIIA", "RK45", "DOP853", "Radau")   # gpme_core.integrate.METHODS
+INTEGRATORS = METHODS            # gpme_core.methods
 
 
 @dataclass(frozen=True)

@@ -154,11 +154,11 @@ def spec_dict(args, problems):
 
 def out_dir_problem(out):
     """Why ``out`` cannot be the sweep's output directory (None when it can), found
-    without creating anything (gpme.out_lock.output_dir_problem, and its points/ and plots/
+    without creating anything (gpme_io.out_lock.output_dir_problem, and its points/ and plots/
     must be directories if present)."""
     from pathlib import Path
 
-    from gpme.out_lock import output_dir_problem
+    from gpme_io.out_lock import output_dir_problem
     problem = output_dir_problem(out, example="reports/sweep")
     if problem:
         return problem
@@ -196,7 +196,7 @@ def main(args):
     if out_problem:
         problems.append(out_problem)
     else:
-        from gpme.out_lock import busy_problem
+        from gpme_io.out_lock import busy_problem
         problems += [p for p in (busy_problem(args.out),) if p]   # before the estimate
     spec, data = None, None
     data = spec_dict(args, problems)
@@ -248,7 +248,7 @@ def _run(args, spec, data, client):
         return 2
     for line in over:
         report(f"--force given, running although {line}")
-    from gpme.out_lock import OutputBusyError, exclusive_output
+    from gpme_io.out_lock import OutputBusyError, exclusive_output
     try:
         with exclusive_output(out):       # one sweep writing to one --out at a time
             return _sweep_and_report(args, spec, data, client, out, report, in_process)

@@ -199,7 +199,7 @@ def crane_point_plans(point, settings, sampler):
 
 def model_point_plans(document, point, settings, sampler):
     """(build s, RunPlans) of one model-file point (gpme_study.model_point)."""
-    from gpme.runs import resolved_step
+    from gpme_io.runs import resolved_step
     from gpme_core.integrate import suggest_rk4_step
 
     from .model_point import scenario_from_document

@@ -1,7 +1,7 @@
 """One point of a model-file sweep: the model file's document with the point's values (and
 the sweep's run settings) written in, built into a Scenario by the model-file loader
 (gpme_io.modelfile, from the document directly: no file is written), run with gpme
-(gpme.runs.simulate_scenario: the file's integrator and step unless the sweep overrides
+(gpme_io.runs.simulate_scenario: the file's integrator and step unless the sweep overrides
 them) and reduced to the generic metrics of gpme_study.model_metrics.
 
 A point that cannot be built (a value the loader refuses: ``invalid``), cannot meet its
@@ -89,7 +89,7 @@ def run_model_point(document: ModelDocument, point: Mapping[str, float], setting
     note (why the |Phi| window is empty, if it is), integrator, dt_s (RK4 step, s), t_end_s,
     sim_wall_s (integration only, s), wall_time_s (the whole point, s).
     """
-    from gpme.runs import simulate_scenario
+    from gpme_io.runs import simulate_scenario
     start = time.perf_counter()
     row = {"key": model_point_key(document, point, settings), "status": "ok", "error": "",
            "failed_run": "", **point, "constraints_met": False, "note": "",

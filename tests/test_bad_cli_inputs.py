@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from gpme.cli import main
-from gpme.out_lock import exclusive_output
+from gpme_io.out_lock import exclusive_output
 from gpme_core.errors import GpmeError, ModelError, UnstableStepError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate

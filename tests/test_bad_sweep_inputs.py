@@ -199,9 +199,9 @@ def test_unreadable_config_does_not_hide_the_other_problems(tmp_path, capsys):
 
 def test_sweep_refused_while_another_writes_the_same_out(tmp_path, capsys):
     """Two sweeps on one --out would interleave their point files: the second is refused,
-    naming the first (gpme.out_lock)."""
+    naming the first (gpme_io.out_lock)."""
     from gpme.cli import main
-    from gpme.out_lock import exclusive_output
+    from gpme_io.out_lock import exclusive_output
     out = tmp_path / "sweep"
     with exclusive_output(out):
         code = main(["sweep", *OK, "--out", str(out), "--in-process", "--quiet"])

@@ -227,7 +227,7 @@ def test_bad_switch_threshold_is_rejected():
 
 def test_events_are_written_with_the_run_outputs(falling_arm):
     import json
-    from gpme.runs import events_json
+    from gpme_io.runs import events_json
     q0, q_dot0, _ = falling_arm
     df = simulate(_system(("q2",)), 0.2, q0, q_dot0, dt=DT, output_dt=0.01)
     doc = json.loads(events_json(df))

@@ -119,7 +119,7 @@ def test_run_rows_report_peaks_and_warn_past_the_yield_limit(tmp_path, yield_lin
     yield strength from [[flexible]] gives the stress verdict (1 Pa: surely exceeded;
     aluminium 6061-T6's 270 MPa: not, for this lightly loaded arm)."""
     from crosscheck.run_checks import WARNING, run_rows, run_warnings
-    from gpme.runs import simulate_scenario
+    from gpme_io.runs import simulate_scenario
     from gpme_io.modelfile import load_model_file
     scenario = load_model_file(_model_file_with(tmp_path, yield_line))
     assert dict(scenario.yield_strengths) == (

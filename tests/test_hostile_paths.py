@@ -78,10 +78,10 @@ def test_report_names_are_url_safe(name):
 
 
 def test_run_outputs_of_hostile_names_stay_inside(tmp_path):
-    """gpme.runs.write_run_outputs (simulate's and verify's gpme step) writes every file of
+    """gpme_io.runs.write_run_outputs (simulate's and verify's gpme step) writes every file of
     a run whose model is named '../../../../c2esc' (or '/abs/x', 'a#b', 'CON') inside the
     output folder."""
-    from gpme.runs import simulate_scenario, write_run_outputs
+    from gpme_io.runs import simulate_scenario, write_run_outputs
     from gpme_io.scenario import crane_scenario
     base = crane_scenario(0)
     df = simulate_scenario(base, t_end=0.02, quick=True)

@@ -139,7 +139,7 @@ def test_interrupt_inside_a_compiled_kernel_is_given_back():
 
 
 def test_lock_taker_removes_a_killed_writers_temporary_files(tmp_path):
-    from gpme.out_lock import exclusive_output
+    from gpme_io.out_lock import exclusive_output
     stale = tmp_path / ".history.csv.k3j2h1.tmp"
     stale.write_text("half a history")
     good = tmp_path / "history.csv"

@@ -278,8 +278,8 @@ def _tiny_figure(*args, **kwargs):
 
 @pytest.mark.parametrize("compressed", [False, True], ids=["simulate-plain", "verify-gzip"])
 def test_a_model_run_history_reads_back(tmp_path, monkeypatch, compressed):
-    from gpme import figures
-    from gpme.runs import simulate_scenario, write_run_outputs
+    from gpme_io import figures
+    from gpme_io.runs import simulate_scenario, write_run_outputs
     from gpme_core.atomic import HISTORY_DIGITS
     from gpme_io.modelfile import load_model_file
     monkeypatch.setattr(figures, "FIGURES", {"coordinates.png": _tiny_figure})

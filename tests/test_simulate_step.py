@@ -1,5 +1,5 @@
 """`gpme simulate`'s default RK4 step is chosen for the accuracy its own checks demand
-(gpme/accurate_step.py, docs/runs.md), and the command exits 1 with a one-line summary when
+(crosscheck/accurate_step.py, docs/runs.md), and the command exits 1 with a one-line summary when
 a check fails.
 
 The model: examples/my_arm/my_arm.urdf without constraints, its elbow on a stiff, nearly
@@ -16,9 +16,9 @@ import pytest
 
 from crosscheck.run_checks import run_rows
 from gpme import cli
-from gpme.accurate_step import MARGIN, ORDER, Outcome, halvings_needed, run_accurately
-from gpme.budget import MAX_STEP_HALVINGS, MAX_WALL_S
-from gpme.runs import simulate_scenario
+from crosscheck.accurate_step import MARGIN, ORDER, Outcome, halvings_needed, run_accurately
+from gpme_io.budget import MAX_STEP_HALVINGS, MAX_WALL_S
+from gpme_io.runs import simulate_scenario
 from gpme_core.run_cost import RunCost
 from gpme_core.stability import STEP_SAFETY, rk4_limit
 from gpme_io.modelfile import load_model_file

@@ -110,7 +110,7 @@ def test_lhs_over_an_integer_path_draws_integers():
 def _direct_crane(amplitude, level, folder):
     """The metrics of one crane point from the loader and gpme_core, independently of
     gpme_study: the model file edited as text, reactions from ProgrammedMotion.solve."""
-    from gpme.runs import simulate_scenario
+    from gpme_io.runs import simulate_scenario
     text = CRANE.read_text()
     for old, new in (("amplitude = 0.5", f"amplitude = {amplitude!r}"),
                      ("level = 1.0 ", f"level = {level!r} "), ("t_end = 10.0", "t_end = 0.3"),

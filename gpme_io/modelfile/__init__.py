@@ -21,7 +21,8 @@ from .build import assemble, build_source, reference_problems
 from .load import parse_model_file
 from .schema import ModelFile
 
-__all__ = ["load_model_file", "read_model_file", "build_scenario", "ModelFile"]
+__all__ = ["load_model_file", "load_model_files", "read_model_file", "build_scenario",
+           "ModelFile"]
 
 # problems in these sections leave the source model unbuildable or incomplete
 _SOURCE_KEYS = ("model", "chain", "flexible")
@@ -77,3 +78,21 @@ def _build(spec: ModelFile, problems: list) -> Scenario:
     if problems or source is None:
         raise ModelFileError([f"{spec.path}: {p}" for p in problems])
     return assemble(spec, source)
+
+
+def load_model_files(paths) -> list:
+    """Scenarios of the model files ``paths`` (a GpmeError lists the problems of each; two
+    files whose models have the same name are refused: their outputs would overwrite each
+    other)."""
+    scenarios = [load_model_file(Path(p)) for p in paths]
+    seen, problems = {}, []
+    for path, scenario in zip(paths, scenarios):
+        if scenario.name in seen:
+            problems.append(f"{path} and {seen[scenario.name]} both name their model "
+                            f"{scenario.name!r} ([model] name); their outputs would "
+                            "overwrite each other: give each model file its own name, or "
+                            "each file once")
+        seen.setdefault(scenario.name, path)
+    if problems:
+        raise ModelFileError(problems)
+    return scenarios

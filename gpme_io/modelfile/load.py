@@ -19,6 +19,7 @@ import numpy as np
 
 from gpme_core import time_functions as tfn
 from gpme_core.errors import ConstraintError, ModelError
+from gpme_core.methods import FIXED_STEP_METHODS
 from gpme_examples.crane import CraneParameters
 from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, URDF_LIMIT,
                                  InputFileError, check_input_file, read_input_file)
@@ -786,7 +787,7 @@ def _run_section(c: _Checker, data: dict) -> Optional[RunSpec]:
         for key, v in (("quick_t_end", quick), ("dt", dt), ("output_dt", output_dt)):
             if v is not None and v > t_end:
                 c.add(f"run.{key}", f"must be <= t_end = {t_end!r} s, got {v!r}")
-    if dt is not None and integrator not in (None, "RK4", "RadauIIA"):
+    if dt is not None and integrator not in (None,) + FIXED_STEP_METHODS:
         c.add("run.dt", f"is the RK4 or RadauIIA step; integrator {integrator!r} chooses its "
               "own steps (remove dt or set integrator = \"RK4\" or \"RadauIIA\")")
     if len(c.problems) > n0:

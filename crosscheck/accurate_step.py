@@ -2,7 +2,7 @@
 only stable.
 
 The scenario's step (the model file's ``[run] dt``, else half the RK4 stability limit at the
-start, at most ``output_dt``: gpme/runs.py resolved_step) is a *stability* bound: at half the
+start, at most ``output_dt``: gpme_io/runs.py resolved_step) is a *stability* bound: at half the
 limit an undamped oscillation of the stiffest mode loses ~8 % of its energy a step
 (|R(1.41 i)|^2 = 0.92), so a run at that step can be stable and still fail its own energy
 balance.  The rule:
@@ -27,7 +27,7 @@ balance.  The rule:
    estimate), says whether halving helps: p < MIN_ORDER means the error does not come from
    the step (a model, a tolerance or round-off) and the search stops; otherwise step 3
    again from this run.
-5. Budget (gpme/budget.py): at most MAX_STEP_HALVINGS halvings of h0 in all, and the runs of
+5. Budget (gpme_io/budget.py): at most MAX_STEP_HALVINGS halvings of h0 in all, and the runs of
    one model together within MAX_WALL_S unless --force.  When a halving with the margin does
    not fit, the least number predicted to pass without it is run if that fits; when nothing
    fits the search stops with one line (the step reached, the worst check's error and
@@ -44,10 +44,11 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Callable, Optional, Sequence
 
-from crosscheck.compare import FAIL, PASS
-from gpme.budget import MAX_STEP_HALVINGS, BudgetError, step_search_problem
 from gpme_core.run_cost import format_seconds
 from gpme_core.stability import round_down
+from gpme_io.budget import MAX_STEP_HALVINGS, BudgetError, step_search_problem
+
+from .compare import FAIL, PASS
 
 # RK4's global order: in its asymptotic regime each halving divides the error by 2^4
 ORDER = 4

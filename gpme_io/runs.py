@@ -6,7 +6,8 @@ from pathlib import Path
 from gpme_core.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
-from gpme_core.integrate import METHODS, simulate, suggest_rk4_step
+from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.methods import METHODS, RADAU_IIA, RK4
 from gpme_io.file_names import named_path
 
 from . import figures
@@ -30,7 +31,7 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
     t_end  : s, default scenario.t_run(quick)
     dt     : s, RK4 step, default :func:`resolved_step`; RadauIIA's step, default the model
              file's when it chose RadauIIA, else gpme_core.integrate.RADAU_IIA_STEP
-    method : one of gpme_core.integrate.METHODS, default the scenario's integrator; with an
+    method : one of gpme_core.methods.METHODS, default the scenario's integrator; with an
              adaptive method a given dt is its largest step
     before_run, estimate_only, max_wall_s : as gpme_core.integrate.simulate
     """
@@ -39,9 +40,9 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
         raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
     t_end = scenario.t_run(quick) if t_end is None else float(t_end)
     out_dt = output_dt or scenario.output_dt
-    if method == "RK4":
+    if method == RK4:
         step = resolved_step(scenario, dt)
-    elif dt is None and method == "RadauIIA" == scenario.integrator:
+    elif dt is None and method == RADAU_IIA == scenario.integrator:
         step = scenario.dt           # the model file's RadauIIA step (None: its default)
     else:
         step = dt

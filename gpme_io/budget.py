@@ -1,6 +1,6 @@
 """The command line's budget for one run: its estimated cost printed before it starts, and a
 refusal above the limits unless ``--force`` is given (gpme_core.run_cost estimates it); and
-the budget of `gpme simulate`'s search for an accurate default step (gpme/accurate_step.py):
+the budget of `gpme simulate`'s search for an accurate default step (crosscheck/accurate_step.py):
 at most MAX_STEP_HALVINGS halvings, all runs of a model within MAX_WALL_S."""
 import sys
 
@@ -16,7 +16,7 @@ RUN_WALL_LIMIT_S = 2 * MAX_WALL_S
 # bytes: a run whose history CSV is estimated above this is refused without --force
 MAX_CSV_BYTES = 2e9
 # halvings of the starting RK4 step `gpme simulate` may make to meet its own checks
-# (gpme/accurate_step.py): the default step is at least 1/16 of the scenario's, a run of at
+# (crosscheck/accurate_step.py): the default step is at least 1/16 of the scenario's, a run of at
 # most 16x its steps (RK4's errors then fall by 16^4 ~ 6.6e4 in the asymptotic regime)
 MAX_STEP_HALVINGS = 4
 
