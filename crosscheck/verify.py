@@ -40,6 +40,7 @@ from gpme_io.modelfile import load_model_files
 from gpme_io.out_lock import exclusive_output, output_file_problem
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
+from .crane_cases import crane_cases
 from .engines import missing_message
 from . import rfem_reference
 from .reports import run_diff, strict_json
@@ -51,11 +52,6 @@ from .verify_meta import environment
 STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
 OPTIONAL_STEPS = ("drake", "exudyn")      # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
-QUICK_T_END = 2.0      # s of programmed motion in --quick (the paper step)
-FULL_T_END = 10.0
-# crane cases of the default run (no --model): n_rfe of the arm, 0 = rigid
-PINOCCHIO_CRANE = {False: (0, 1, 3, 10), True: (0, 3)}
-MUJOCO_CRANE = (0, 1)
 PARTIAL_SUFFIX = ".partial"
 OWNER_FILE = ".owner.json"
 # s: a staging directory without a readable owner (or from another host) older than this is
@@ -68,18 +64,11 @@ def _say(msg):
 
 
 def default_scenarios(step, quick):
-    """The paper's crane cases a step uses when no model file is given."""
-    from gpme_io.scenario import crane_scenario
-    if step == "pinocchio":
-        return [crane_scenario(n) for n in PINOCCHIO_CRANE[bool(quick)]]
-    if step == "mujoco":
-        return [crane_scenario(n, on_constraints=True) for n in MUJOCO_CRANE]
-    if step in OPTIONAL_STEPS:
-        if missing_message(step):
-            return []
-        module = __import__(f"crosscheck.{step}.check", fromlist=["default_scenarios"])
-        return module.default_scenarios(quick)
-    return [crane_scenario(0), crane_scenario(3)]
+    """The paper's crane cases a step uses when no model file is given
+    (crosscheck.crane_cases); none for an optional engine that is not installed."""
+    if step in OPTIONAL_STEPS and missing_message(step):
+        return []
+    return crane_cases(step, quick)
 
 
 def _paper_step(run_dir, quick, progress, max_wall_s=None):
@@ -87,7 +76,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
     from gpme_examples import paper
     from gpme_io.scenario import crane_scenario
     from .run_checks import rows_frame, run_rows
-    t_end = QUICK_T_END if quick else FULL_T_END
+    t_end = paper.QUICK_T_END if quick else paper.T_END
     runs, rows, rfem_rows = {}, [], []
     for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
         _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
@@ -502,7 +491,7 @@ def estimate_runs(scenarios, quick, force):
     _say("estimated cost of the gpme runs (the engine steps take about as long again):")
     if scenarios is None:
         from gpme_examples import paper
-        t_end = QUICK_T_END if quick else FULL_T_END
+        t_end = paper.QUICK_T_END if quick else paper.T_END
         for case in ("rigid", "flexible"):
             _say(f"  paper, {case} crane, {t_end:g} s:")
             run_budget(f"the paper's {case} crane", force)(

@@ -25,7 +25,6 @@ from gpme_io.out_lock import output_dir_problem
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EXIT_WRITE = 74         # EX_IOERR: an output could not be written (gpme_core.errors)
-CRANE_T_END, CRANE_QUICK_T_END = 10.0, 2.0     # s, the built-in crane's runs (as verify's)
 
 
 def _error(msg):
@@ -107,7 +106,7 @@ def _simulate_paper(args):
     from gpme_examples import paper
     from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
-    t_end = args.t_end or (CRANE_QUICK_T_END if args.quick else CRANE_T_END)
+    t_end = args.t_end or (paper.QUICK_T_END if args.quick else paper.T_END)
     n_rfe = paper.DEFAULT_N_RFE if args.n_rfe is None else args.n_rfe
     method = args.method or "RK4"
     runs, rows = {}, []

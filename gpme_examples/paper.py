@@ -1,6 +1,5 @@
 """The paper's two simulations (section 3): the crane with rigid links and flexible support,
 and with the flexible arm and flexible support, 10 s of programmed motion."""
-import time
 from pathlib import Path
 
 from . import figures
@@ -10,13 +9,17 @@ from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate
 
 DEFAULT_N_RFE = 3
+# s, the paper's runs: 10 s of programmed motion (Figs. 2 and 3); a quick (CI) run takes
+# the first 2 s.  Defined here once: crane_scenario, `gpme simulate`, `gpme verify`.
+T_END = 10.0
+QUICK_T_END = 2.0
 # RK4 steps: the rigid crane's fastest motion is the 5 Hz support and the 20 1/s
 # Baumgarte rate; the flexible arm's RFEM torsion modes (about 5 kHz at n = 3) need
 # dt below 8e-5 s (gpme_core.integrate.suggest_rk4_step); 5e-5 s keeps a 40 % margin.
 DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 
-def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=10.0, dt=None, method="RK4", on_manifold=False,
+def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=T_END, dt=None, method="RK4", on_manifold=False,
              params=CraneParameters(), progress=False, output_dt=1e-3, static_arm=False,
              before_run=None, estimate_only=False, max_wall_s=None):
     """One run of the paper: case 'rigid' or 'flexible'; returns the history DataFrame.

@@ -152,7 +152,8 @@ def crane_scenario(n_rfe=0, on_constraints=False, static_arm=False):
         dt = min(dt, suggest_rk4_step(system.model, q0))
     return Scenario(name=system.model.name, model=system.model,
                     constraints=tuple(crane.crane_constraints(params)), system=system,
-                    q0=q0, q_dot0=qd0, t_end=10.0, quick_t_end=2.0, integrator="RK4",
+                    q0=q0, q_dot0=qd0, t_end=paper.T_END, quick_t_end=paper.QUICK_T_END,
+                    integrator="RK4",
                     dt=dt, output_dt=1e-3, on_constraints=on_constraints,
                     yield_strengths={f.name: params.arm_yield_strength
                                      for f in system.model.flexible_links})

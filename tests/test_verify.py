@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 
 from crosscheck import verify
+from gpme_examples import paper
 
 REPO = Path(__file__).resolve().parent.parent
 SCREENSHOTS = REPO / "reports" / "screenshots"
@@ -42,7 +43,7 @@ def test_run_directory_and_latest(report):
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]
     from crosscheck.reports.rows import read_rows
     back = read_rows(run_dir, "gpme")
-    assert pd.read_csv(run_dir / "paper" / "rigid.csv.gz")["t"].iloc[-1] == verify.QUICK_T_END
+    assert pd.read_csv(run_dir / "paper" / "rigid.csv.gz")["t"].iloc[-1] == paper.QUICK_T_END
     run_rows = back[back["section"] == "run"]
     assert set(run_rows["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
                                          "energy balance",

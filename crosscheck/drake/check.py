@@ -56,6 +56,7 @@ from gpme_core.errors import GpmeError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 
+from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..pinocchio.check import FULL, QUICK, TOLERANCES as PIN_TOLERANCES, scenario_states, \
     solve_tolerances
@@ -301,11 +302,9 @@ def compare_case(case: DrakeCase, states: Sequence) -> pd.DataFrame:
 
 # --------------------------------------------------------------------------- the run
 def default_scenarios(quick: bool = False) -> list:
-    """The paper's crane (gpme_io.scenario.crane_scenario): rigid and with 1, 3, 10 RFEM
-    segments; quick: rigid and 3 segments (the CI budget; n = 10 adds nothing a quick run
-    could see that n = 3 does not, and its RK4 step makes its free run the longest)."""
-    from gpme_io.scenario import crane_scenario
-    return [crane_scenario(n) for n in ((0, 3) if quick else (0, 1, 3, 10))]
+    """The paper's crane cases (crosscheck.crane_cases: rigid and 1, 3, 10 RFEM segments;
+    quick: rigid and 3, the CI budget)."""
+    return crane_cases("drake", quick)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ import pinocchio as pin
 
 from gpme_core.errors import GpmeError
 
+from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from ..reports import tables as report
 from ..reports.rows import own_rows, write_rows
@@ -58,9 +59,8 @@ TOLERANCES = {
 
 def default_scenarios(quick: bool = False) -> list:
     """The paper's crane, rigid and with 3 RFEM segments, started on the constraints
-    (gpme_io.scenario.crane_scenario(n, on_constraints=True)); the same in quick."""
-    from gpme_io.scenario import crane_scenario
-    return [crane_scenario(n, on_constraints=True) for n in (0, 3)]
+    (crosscheck.crane_cases); the same in quick."""
+    return crane_cases("exudyn", quick)
 
 
 def model_rows(scenario, quick: bool) -> list:

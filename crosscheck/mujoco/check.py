@@ -31,6 +31,7 @@ from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate
 
 from .. import run_gates
+from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from . import cases
 from . import mechanism as mech
@@ -64,10 +65,9 @@ def _run_rows(section, scenario, refined, df, columns, label, case):
     return rows
 
 
-def default_scenarios():
-    """The paper's crane, rigid and RFEM n = 1, on the constraints."""
-    from gpme_io.scenario import crane_scenario
-    return [crane_scenario(0, on_constraints=True), crane_scenario(1, on_constraints=True)]
+def default_scenarios(quick: bool = False) -> list:
+    """The paper's crane, rigid and RFEM n = 1, on the constraints (crosscheck.crane_cases)."""
+    return crane_cases("mujoco", quick)
 
 
 def _dt(scenario):
@@ -243,7 +243,7 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
     rigid and n = 1 on the constraints), write its rows (crosscheck.reports.rows), plots and
     out_dir/mujoco.html atomically and return the tidy table (columns status: pass / fail / info, passed)."""
     out_dir = Path(out_dir)
-    scenarios = list(default_scenarios() if scenarios is None else scenarios)
+    scenarios = list(default_scenarios(quick) if scenarios is None else scenarios)
     p = cases.plan(quick)
     start = time.perf_counter()
 

@@ -56,6 +56,7 @@ from gpme_io.urdf import read_urdf, write_urdf
 from gpme_io.urdf_reader import with_link_frames
 from gpme_io.urdf_writer import link_own_frame
 
+from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
                                     reference_constraints)
@@ -483,11 +484,9 @@ def compare_case(case: ModelCase, states: Sequence[State]) -> pd.DataFrame:
 
 # --------------------------------------------------------------------------- the run
 def default_scenarios(quick: bool = False) -> list:
-    """The paper's crane, rigid and with 1, 3, 10 RFEM segments (gpme_io.scenario.crane_scenario),
-    the scenarios `gpme verify` checks when no model file is given (quick or not: the
-    state counts, not the models, make the quick run quick)."""
-    from gpme_io.scenario import crane_scenario
-    return [crane_scenario(n) for n in (0, 1, 3, 10)]
+    """The paper's crane cases `gpme verify` checks here when no model file is given
+    (crosscheck.crane_cases: rigid and 1, 3, 10 RFEM segments; quick: rigid and 3)."""
+    return crane_cases("pinocchio", quick)
 
 
 def _progress(enabled, total):
