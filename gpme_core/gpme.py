@@ -120,9 +120,19 @@ class ProgrammedMotion:
         self.damping_form = damping_form
         self.dependent = None
         if dependent is not None:
-            self.set_dependent(dependent)
+            self._set_partition(dependent)
         elif self.n_constraints == 0:
-            self.set_dependent(())
+            self._set_partition(())
+        self._frozen = True
+
+    def __setattr__(self, name, value):
+        """Immutable once built, like Model: a changed partition is a new object
+        (:meth:`with_dependent`).  (gpme_core.compiled.for_system keeps its compiled form in
+        the instance's __dict__: a cache of what the object already is, not a change.)"""
+        if self.__dict__.get("_frozen", False):
+            raise AttributeError(f"ProgrammedMotion is immutable: cannot set {name!r}; use "
+                                 "with_dependent(names) for another partition")
+        object.__setattr__(self, name, value)
 
     def __getstate__(self):
         """Pickled without the compiled form that gpme_core.compiled.for_system caches on it:
@@ -141,18 +151,20 @@ class ProgrammedMotion:
         return other
 
     # --------------------------------------------------------------- partition
-    def set_dependent(self, names):
-        """Fix the dependent coordinates by name (m of them)."""
+    def _set_partition(self, names):
+        """Fix the dependent coordinates by name (m of them): while the object is built only
+        (__init__, with_dependent's fresh copy)."""
         names = tuple(names)
         if len(names) != self.n_constraints or len(set(names)) != len(names):
             raise ModelError(f"need {self.n_constraints} distinct dependent coordinates "
                              f"(one per constraint {list(self.constraint_names)}), got {list(names)}")
         dc = np.array([self.model.index(nm) for nm in names], dtype=int)
-        self.dependent = names
-        self.dc = dc
-        self.ic = np.array([k for k in range(self.model.n_coordinates) if k not in set(dc)],
+        d = self.__dict__
+        d["dependent"] = names
+        d["dc"] = dc
+        d["ic"] = np.array([k for k in range(self.model.n_coordinates) if k not in set(dc)],
                            dtype=int)
-        self.independent = tuple(self.model.coordinate_names[k] for k in self.ic)
+        d["independent"] = tuple(self.model.coordinate_names[k] for k in d["ic"])
 
     def with_dependent(self, names):
         """A copy of this system with dependent coordinates ``names`` (this one unchanged).
@@ -160,7 +172,7 @@ class ProgrammedMotion:
         The copy shares the model and the bound constraints (neither is modified by a
         solve); only the partition is its own."""
         other = copy.copy(self)
-        other.set_dependent(names)
+        other._set_partition(names)
         return other
 
     def pivoted_dependent(self, t, q, q_dot=None):
@@ -186,13 +198,10 @@ class ProgrammedMotion:
                 f"controlled by any coordinate at q = {np.round(q, 6).tolist()}")
         return tuple(self.model.coordinate_names[k] for k in piv[:self.n_constraints])
 
-    def choose_dependent(self, t, q, q_dot=None):
-        """Set the dependent coordinates of this system to :meth:`pivoted_dependent`'s
-        choice at (t, q, q_dot); returns their names.  (gpme_core.integrate.simulate does
-        not call this: it keeps the partition of a run in its own copy.)"""
-        names = self.pivoted_dependent(t, q, q_dot)
-        self.set_dependent(names)
-        return names
+    def with_pivoted_dependent(self, t, q, q_dot=None):
+        """A copy of this system whose dependent coordinates are :meth:`pivoted_dependent`'s
+        choice at (t, q, q_dot) (this one unchanged)."""
+        return self.with_dependent(self.pivoted_dependent(t, q, q_dot))
 
     def _require_partition(self):
         if self.dependent is None:
@@ -255,18 +264,16 @@ class ProgrammedMotion:
         phi, phi_dot, a, kappa = self.constraints(t, q, q_dot, terms.kin)
         constraint_rhs = -kappa - 2.0 * self.alpha * phi_dot - self.beta ** 2 * phi
         names, ic, dc = self.dependent, self.ic, self.dc
-        q_ddot, lam, rcond, ok = _reduced_solve(terms.M, rhs, a, constraint_rhs, ic, dc)
-        rel = _relative_rcond(a, dc, rcond)
+        q_ddot, lam, rel, ok = _reduced_solve(terms.M, rhs, a, constraint_rhs, ic, dc)
         if switch_below is not None and not rel >= switch_below:
             new = self._pivoted_names(a, t, q)
             if new != names:
                 new_dc = np.array([self.model.index(nm) for nm in new], dtype=int)
                 new_ic = np.setdiff1d(np.arange(n), new_dc)
                 trial = _reduced_solve(terms.M, rhs, a, constraint_rhs, new_ic, new_dc)
-                new_rel = _relative_rcond(a, new_dc, trial[2])
-                if new_rel > rel:
-                    names, ic, dc, rel = new, new_ic, new_dc, new_rel
-                    q_ddot, lam, rcond, ok = trial
+                if trial[2] > rel:
+                    names, ic, dc = new, new_ic, new_dc
+                    q_ddot, lam, rel, ok = trial
         if not rel > SINGULAR_RCOND:
             raise _singular_partition(names, rel, t, q, a, self.constraint_names)
         if not ok:
@@ -382,11 +389,36 @@ def _relative_rcond(a, dc, rcond):
 
 
 def _reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
-    """(q_ddot (n,), multipliers (k,), rcond(A_dc) (1-norm), ok) of the reduced equations
-    for the partition (ic, dc); never raises (ok False or rcond <= SINGULAR_RCOND: the
-    caller raises).  Compiled kernel when gpme_core.fast is enabled, numpy otherwise."""
+    """(q_ddot (n,), multipliers (k,), partition_rcond, ok) of the reduced equations for the
+    partition (ic, dc); never raises (ok False, or partition_rcond <= SINGULAR_RCOND: the
+    caller raises).  Two computation paths: the compiled runs' own kernel
+    (gpme_core.kernels.reduced_solve, Cholesky of N^T M N) when gpme_core.fast is enabled,
+    else the numpy reference below (LU of [N^T M; A]); tests hold them equal to round-off."""
     if fast.ENABLED:
-        return fast.run(fast.reduced_solve, m, rhs, a, constraint_rhs, ic, dc)
+        return _compiled_reduced_solve(m, rhs, a, constraint_rhs, ic, dc)
+    q_ddot, lam, rcond, ok = _numpy_reduced_solve(m, rhs, a, constraint_rhs, ic, dc)
+    return q_ddot, lam, _relative_rcond(a, dc, rcond), ok
+
+
+def _compiled_reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
+    """_reduced_solve through gpme_core.kernels.reduced_solve (no switching: switch_below
+    0; singular at partition_rcond <= SINGULAR_RCOND, as the numpy path's caller)."""
+    from . import kernels
+    n, k = m.shape[0], dc.shape[0]
+    q_ddot, lam = np.zeros(n), np.zeros(k)
+    scratch = np.empty(kernels.reduced_scratch_size(n, k))
+    status, rel = fast.run(kernels.reduced_solve, np.ascontiguousarray(m, dtype=float),
+                           np.ascontiguousarray(rhs, dtype=float),
+                           np.ascontiguousarray(a, dtype=float),
+                           np.ascontiguousarray(constraint_rhs, dtype=float),
+                           np.ascontiguousarray(ic, dtype=np.int64),
+                           np.ascontiguousarray(dc, dtype=np.int64), 0.0, SINGULAR_RCOND,
+                           q_ddot, lam, scratch)
+    return q_ddot, lam, float(rel), status == kernels.OK
+
+
+def _numpy_reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
+    """(q_ddot (n,), multipliers (k,), rcond(A_dc) (1-norm), ok): the numpy reference."""
     n, k = m.shape[0], dc.shape[0]
     a_dc = a[:, dc]
     try:

@@ -114,8 +114,9 @@ def kernels_compiled(compiled=None):
     from . import fast
     if not fast.ENABLED:
         return True
-    done = all(getattr(fast, name).signatures for name in ("chain_and_terms", "reduced_solve",
-                                                           "point"))
+    from . import kernels
+    done = (all(getattr(fast, name).signatures for name in ("chain_and_terms", "point"))
+            and bool(kernels.reduced_solve.signatures))
     return done and (compiled is None or bool(compiled.module.evaluate.signatures))
 
 

@@ -60,7 +60,8 @@ def test_point_kinematics_compiled_equals_numpy(n_rfe, arm, rng, monkeypatch):
 
 @pytest.mark.parametrize("n_rfe", [0, 3])
 def test_reduced_solve_compiled_equals_numpy(n_rfe, rng, monkeypatch):
-    """fast.reduced_solve against the numpy reduced form (N^T M q_ddot = N^T rhs with the
+    """The compiled reduced solve (gpme_core.kernels.reduced_solve, the compiled runs' own:
+    Cholesky of N^T M N) against the numpy reference (LU of N^T M q_ddot = N^T rhs with the
     constraint rows): accelerations and multipliers at random states near the crane's
     manifold (Baumgarte terms active, so the whole right-hand side is exercised)."""
     from gpme_examples.crane import crane_system, initial_state

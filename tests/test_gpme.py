@@ -109,7 +109,8 @@ def test_automatic_partition_is_well_conditioned_and_gives_the_same_motion(rng):
     model = paper.model
     auto = ProgrammedMotion(model, crane_constraints())
     q, qd = initial_state(model)
-    names = auto.choose_dependent(0.0, q, qd)
+    auto = auto.with_pivoted_dependent(0.0, q, qd)
+    names = auto.dependent
     assert len(names) == 2 and len(set(names)) == 2
     a = auto.constraints(0.0, q, qd)[2]
     assert np.linalg.cond(a[:, auto.dc]) < 1e3

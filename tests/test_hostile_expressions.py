@@ -446,7 +446,7 @@ def test_dependent_constraints_are_named_whatever_the_partition(dependent):
                               SympyPointConstraint("y + z", name="b"),
                               SympyPointConstraint("-2*x + 0.6 + 3*y + 3*z", name="c")])
     if dependent is not None:
-        system.set_dependent(dependent)
+        system = system.with_dependent(dependent)
     with pytest.raises(ConstraintError) as exc:
         simulate(system, 0.01, zero, zero, dt=1e-3, compiled=False)
     message = str(exc.value)

@@ -139,3 +139,36 @@ def test_simulate_keeps_the_given_partition_when_the_run_switches():
     df = simulate(system, 0.05, np.zeros(2), np.zeros(2), dt=1e-3)
     assert df.attrs["events"] and df.attrs["dependent_final"] == ["x"]
     assert _observable(system) == before and system.dependent == ("a",)
+
+
+def test_programmed_motion_is_immutable_like_model():
+    """A built ProgrammedMotion cannot be changed (issue 25): another partition is a new
+    object, and pickling or copying gives an equally immutable one."""
+    system = crane_system(0)
+    for name, value in (("dependent", ("psi2", "z4")), ("alpha", 1.0), ("model", None),
+                        ("new_attribute", 1)):
+        with pytest.raises(AttributeError, match="immutable"):
+            setattr(system, name, value)
+    q0, qd0 = initial_state(system.model)
+    other = system.with_dependent(("psi2", "z4"))
+    assert system.dependent == ("psi3", "z4") and other.dependent == ("psi2", "z4")
+    pivoted = system.with_pivoted_dependent(0.0, q0, qd0)
+    assert system.dependent == ("psi3", "z4") and len(pivoted.dependent) == 2
+    for twin in (copy.copy(system), pickle.loads(pickle.dumps(system))):
+        with pytest.raises(AttributeError, match="immutable"):
+            twin.alpha = 2.0
+
+
+def test_the_pinocchio_check_leaves_the_scenarios_system_alone():
+    """crosscheck.pinocchio.check.scenario_states used to choose the partition on the
+    scenario's own system; it works on a copy now."""
+    from crosscheck.pinocchio.check import QUICK, scenario_states
+    from gpme_io.scenario import Scenario
+    system = ProgrammedMotion(crane_system(0).model, crane_system(0).constraint_specs)
+    model = system.model
+    q0, qd0 = initial_state(model)
+    scenario = Scenario(name="crane_no_partition", model=model,
+                        constraints=system.constraint_specs, system=system, q0=q0,
+                        q_dot0=qd0, t_end=0.1, quick_t_end=0.05)
+    assert len(scenario_states(scenario, QUICK)) > 0
+    assert scenario.system.dependent is None

@@ -95,7 +95,9 @@ def test_coupled_constraint_velocity_map_and_reduced_solution():
         np.testing.assert_allclose(sol.reaction_forces, [sol.multipliers[0], 2 * sol.multipliers[0]], rtol=1e-12)
     auto = ProgrammedMotion(table(), [c], baumgarte=(0.0, 0.0))
     assert auto.dependent is None
-    assert auto.choose_dependent(t, q, qd) == ("y",)     # the larger Jacobian column
+    assert auto.pivoted_dependent(t, q, qd) == ("y",)    # the larger Jacobian column
+    assert auto.dependent is None                        # asking changed nothing
+    auto = auto.with_pivoted_dependent(t, q, qd)
     assert auto.independent == ("x",)
     np.testing.assert_array_equal(auto.dc, [1])
     np.testing.assert_array_equal(auto.ic, [0])
@@ -104,7 +106,7 @@ def test_coupled_constraint_velocity_map_and_reduced_solution():
 def test_unconstrained_system_solves_m_q_ddot_equal_h_plus_q():
     """No constraints: q_ddot = M^-1 (h + Q) = Q / m for the table; every state is consistent."""
     s = ProgrammedMotion(table())
-    assert s.dependent == () and s.choose_dependent(0.0, np.zeros(2)) == ()
+    assert s.dependent == () and s.pivoted_dependent(0.0, np.zeros(2)) == ()
     q, qd = np.array([0.3, 0.1]), np.array([0.2, -0.5])
     want = np.array([-KX * (q[0] - REFX) - DX * qd[0], -KY * (q[1] - REFY) - DY * qd[1]]) / MASS
     sol = s.solve(0.0, q, qd)
@@ -167,21 +169,21 @@ def test_singular_partition_and_dependent_constraints_raise():
     twin = ProgrammedMotion(table(), [CoordinateProgramme(F, axis=0, name="P"),
                                       CoordinateProgramme(F, axis=0, name="Q")])
     with pytest.raises(ConstraintError, match="rank"):
-        twin.choose_dependent(0.0, np.zeros(2))
+        twin.pivoted_dependent(0.0, np.zeros(2))
     # the rank test is relative to the largest pivot: a regular Jacobian scaled by 0.01 is
     # fine, one with pivots 141 and ~7e-10 (ratio 5e-12 < 1e-10) is rank deficient
     small = ProgrammedMotion(table(), [SympyPointConstraint("0.01*x - 0.001", name="A"),
                                        SympyPointConstraint("0.01*y", name="B")])
-    assert sorted(small.choose_dependent(0.0, np.zeros(2))) == ["x", "y"]
+    assert sorted(small.pivoted_dependent(0.0, np.zeros(2))) == ["x", "y"]
     near = ProgrammedMotion(table(), [SympyPointConstraint("100*x", name="A"),
                                       SympyPointConstraint("100*x + 1e-9*y", name="B")])
     with pytest.raises(ConstraintError, match="rank"):
-        near.choose_dependent(0.0, np.zeros(2))
+        near.pivoted_dependent(0.0, np.zeros(2))
     with pytest.raises(ModelError, match="dependent coordinates not chosen"):
         twin.solve(0.0, np.zeros(2), np.zeros(2))
     for names in (["x", "x"], ["x"], ["x", "y", "y"]):
         with pytest.raises(ModelError, match="distinct dependent"):
-            twin.set_dependent(names)
+            twin.with_dependent(names)
     for kw in ({"baumgarte": (-1.0, 1.0)}, {"baumgarte": (1.0, np.nan)}, {"damping_form": "other"}):
         with pytest.raises(ModelError):
             ProgrammedMotion(table(), [CoordinateProgramme(F, axis=0, name="P")], **kw)

@@ -149,8 +149,7 @@ def test_the_time_dependent_gradient_term_is_large_here(arm, bound):
 
 # --------------------------------------------------------------------------- Pinocchio
 def arm_scenario(arm, t, q, qd):
-    system = ProgrammedMotion(arm, SPECS, baumgarte=(10.0, 10.0))
-    system.choose_dependent(t, q, qd)
+    system = ProgrammedMotion(arm, SPECS, baumgarte=(10.0, 10.0)).with_pivoted_dependent(t, q, qd)
     return Scenario(name="arm_time_dependent_ellipses", model=arm, constraints=SPECS,
                     system=system, q0=q, q_dot0=qd, t_end=1.0, quick_t_end=0.2)
 

@@ -299,8 +299,8 @@ def scenario_seed(name: str) -> int:
 def scenario_states(scenario, plan: RunPlan) -> list:
     """Random and run states of ``scenario`` under ``plan``."""
     system = scenario.system
-    if system.dependent is None:
-        system.choose_dependent(0.0, scenario.q0, scenario.q_dot0)
+    if system.dependent is None:        # the scenario's system is not changed
+        system = system.with_pivoted_dependent(0.0, scenario.q0, scenario.q_dot0)
     n_random, n_run = state_counts(plan, system.model.n_coordinates)
     rng = np.random.default_rng(scenario_seed(scenario.name))
     states = random_states(system, n_random, rng, scenario.t_end, scenario.flexible_coordinates,

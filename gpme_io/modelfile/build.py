@@ -246,7 +246,8 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                         if spec.initial.on_constraints else ""))
     _check_finite_at(spec, model, q0, label)
     if system.dependent is None:
-        chosen = system.choose_dependent(0.0, q0, q_dot0)
+        system = system.with_pivoted_dependent(0.0, q0, q_dot0)
+        chosen = system.dependent
         if chosen:
             notes.append(f"solver: dependent coordinates {list(chosen)} chosen by pivoting on "
                          "the constraint Jacobian at q0 (give [solver] dependent to fix them)")
