@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gpme_core.atomic import atomic_save_figure, atomic_write_csv
+from gpme_io.atomic import atomic_save_figure, atomic_write_csv
 from gpme_core.compiled import for_system, single_threaded_blas
 from gpme_core.constraints import SympyPointConstraint
 from gpme_core.errors import GpmeError

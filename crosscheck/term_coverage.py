@@ -41,7 +41,7 @@ from typing import Callable, Mapping, Optional, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from gpme_core.atomic import atomic_write_text
+from gpme_io.atomic import atomic_write_text
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                                    SympyPointConstraint, evaluate_constraints)
 from gpme_core.dynamics import dynamics_terms

@@ -74,6 +74,7 @@ def default_scenarios(step, quick):
 def _paper_step(run_dir, quick, progress, max_wall_s=None):
     """The paper's two crane runs, with the paper's figures (default run)."""
     from gpme_examples import paper
+    from gpme_io.paper_outputs import write_outputs
     from gpme_io.scenario import crane_scenario
     from .run_checks import rows_frame, run_rows
     t_end = paper.QUICK_T_END if quick else paper.T_END
@@ -86,7 +87,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
         rows += run_rows(crane_scenario(n), runs[case])
         rfem_rows += rfem_reference.rfem_rows(crane_scenario(n))    # RFEM vs beam theory
-    paper.write_outputs(runs, run_dir / "paper", compressed=True)
+    write_outputs(runs, run_dir / "paper", compressed=True)
     df = _with_rfem_rows(rows_frame(rows), rfem_rows)
     write_rows(df, run_dir, "gpme")
     return df, runs

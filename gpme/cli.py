@@ -104,6 +104,7 @@ def _simulate_paper(args):
     same checks as a model file's run (crosscheck.run_checks)."""
     from gpme_io.budget import run_budget, wall_limit
     from gpme_examples import paper
+    from gpme_io.paper_outputs import write_outputs
     from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     t_end = args.t_end or (paper.QUICK_T_END if args.quick else paper.T_END)
@@ -135,7 +136,7 @@ def _simulate_paper(args):
             label, run, partial(simulate_rows, scenario), estimate,
             accurate=method == "RK4" and args.dt is None, force=args.force, start=start)
         rows += case_rows
-    return paper.write_outputs(runs, args.out), rows
+    return write_outputs(runs, args.out), rows
 
 
 def _simulate_models(args):

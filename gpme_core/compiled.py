@@ -26,15 +26,16 @@ import hashlib
 import importlib.util
 import os
 import sys
+import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from . import fast, kernels
-from .atomic import atomic_write_text
 from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                           SympyPointConstraint)
+from .errors import OutputWriteError
 from .gpme import SINGULAR_RCOND
 from .time_functions import (Constant, Cosine, QuinticRamp, Sine, SympyTimeFunction,
                              Tabulated)
@@ -229,6 +230,33 @@ def kernel_cache_dir():
 _MODULES = {}
 
 
+# Not gpme_io.atomic (the output writers, a layer above): the engine writes only its own
+# cache of generated code, with this small atomic write of its own.
+def _write_cached_module(path, source):
+    """Write a generated kernel module into the engine's own disk cache atomically (a
+    temporary file beside it moved into place), so another process never imports half a
+    file.  This cache is the engine's compiled code, not output: the output writers live in
+    gpme_io.atomic (the engine writes no results, issue 25).  A file-system failure raises
+    OutputWriteError naming the file."""
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(source)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)   # mkstemp makes 0600; readable as numba's cache is
+        os.replace(tmp, path)
+    except OSError as exc:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass                    # already moved into place, or its folder went away
+        raise OutputWriteError(path, exc) from None
+
+
 def generated_kernels(user_points, user_times):
     """gpme_core.kernels itself without SymPy parts, else the generated module for them."""
     if not user_points and not user_times:
@@ -243,7 +271,7 @@ def generated_kernels(user_points, user_times):
         return _MODULES[digest]
     path = kernel_cache_dir() / f"gpme_kernels_{digest}.py"
     if not path.exists() or path.read_text(encoding="utf-8") != source:
-        atomic_write_text(path, source)
+        _write_cached_module(path, source)
     name = f"gpme_generated_kernels_{digest}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)

@@ -1,9 +1,6 @@
 """The paper's two simulations (section 3): the crane with rigid links and flexible support,
-and with the flexible arm and flexible support, 10 s of programmed motion."""
-from pathlib import Path
-
-from . import figures
-from gpme_core.atomic import HISTORY_DIGITS, atomic_save_figure, atomic_write_csv
+and with the flexible arm and flexible support, 10 s of programmed motion.  Their histories
+and the paper's figures are written by gpme_io.paper_outputs (examples return data)."""
 from .crane import CraneParameters, build_crane, crane_system, initial_state
 from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate
@@ -40,25 +37,6 @@ def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=T_END, dt=None, method="RK4", on_m
     df.attrs["case"] = case
     df.attrs["n_rfe"] = n
     return df
-
-
-def write_outputs(runs, out_dir, params=CraneParameters(), compressed=False):
-    """The history of each case and the PNG figures into out_dir; returns {name: path}.
-    Histories: <case>.csv in full precision, or with ``compressed`` (verify's report)
-    <case>.csv.gz with gpme_core.atomic.HISTORY_DIGITS significant digits."""
-    out = Path(out_dir)
-    paths = {}
-    for case, df in runs.items():
-        name = f"{case}.csv.gz" if compressed else f"{case}.csv"
-        paths[name] = out / name
-        atomic_write_csv(df, paths[name], HISTORY_DIGITS if compressed else None)
-    figs = {"fig2_joint_coordinates.png": figures.joint_coordinates(runs),
-            "fig3_end_effector.png": figures.end_effector(runs, params),
-            "constraint_violation.png": figures.constraint_violation(runs)}
-    for name, fig in figs.items():
-        paths[name] = out / name
-        atomic_save_figure(fig, paths[name])
-    return paths
 
 
 def summary(df, transient=2.0, params=CraneParameters()):

@@ -1,4 +1,4 @@
-"""Figures of any scenario's run (the crane's paper figures are gpme_examples.figures).
+"""Figures of any scenario's run (the crane's paper figures are gpme_io.paper_figures).
 
 Each function takes a run DataFrame of gpme_core.integrate.simulate and the Scenario and
 returns a matplotlib Figure built with the object API (no pyplot state, no backend

@@ -3,7 +3,7 @@ and one writer per output directory: an advisory lock (fcntl.flock on <dir>/.gpm
 while a command writes there, so two runs never interleave their files in one place.  The
 operating system releases it when the process ends, however it ends (no stale lock after a
 kill); the lock file names the holder for the message of the one refused.  Whoever takes
-the lock removes the temporary files (``.*.tmp``, gpme_core.atomic) that a killed writer
+the lock removes the temporary files (``.*.tmp``, gpme_io.atomic) that a killed writer
 left at the top of the directory."""
 import contextlib
 import json
@@ -37,7 +37,7 @@ def exclusive_output(directory, flag="--out"):
             raise OutputBusyError(
                 f"{flag} {str(directory)!r} is being written by another gpme run ({holder}); "
                 f"wait for it to finish or give another {flag}") from None
-        for stale in Path(directory).glob(".*.tmp"):      # gpme_core.atomic's temporary
+        for stale in Path(directory).glob(".*.tmp"):      # gpme_io.atomic's temporary
             stale.unlink(missing_ok=True)   # files of a killed writer: no writer is alive now
         os.ftruncate(fd, 0)
         os.write(fd, json.dumps({"pid": os.getpid(), "host": socket.gethostname(),

@@ -3,7 +3,7 @@ the gpme step of `gpme verify`)."""
 import json
 from pathlib import Path
 
-from gpme_core.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
+from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
 from gpme_core.integrate import simulate, suggest_rk4_step
@@ -67,7 +67,7 @@ def write_run_outputs(scenario, df, out_dir, compressed=False):
     """<out_dir>/<name>.csv and <name>_<figure>.png for one run, and <name>_events.json
     when the run switched its dependent coordinates; returns {label: path}.  With
     ``compressed`` (verify's report) the history is <name>.csv.gz with
-    gpme_core.atomic.HISTORY_DIGITS significant digits instead of full precision."""
+    gpme_io.atomic.HISTORY_DIGITS significant digits instead of full precision."""
     out = Path(out_dir)
     history = named_path(out, scenario.name, ".csv.gz" if compressed else ".csv")
     paths = {history.name: history}

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from gpme_core import transforms as tf
-from gpme_core.atomic import atomic_write_text
+from gpme_io.atomic import atomic_write_text
 from gpme_core.errors import ModelFileError
 from gpme_core.model import PRISMATIC, REVOLUTE, Model
 

@@ -260,7 +260,7 @@ def _run(args, spec, data, client):
 def _sweep_and_report(args, spec, data, client, out, report, in_process):
     import json
 
-    from gpme_core.atomic import atomic_write_text
+    from gpme_io.atomic import atomic_write_text
 
     from .plots import write_plots
     from .runner import run_sweep

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gpme_core.atomic import atomic_save_figure
+from gpme_io.atomic import atomic_save_figure
 from gpme_io import file_names
 
 from .spec import PARAMETERS, unit_of

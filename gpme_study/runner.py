@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from gpme_core.atomic import atomic_write_bytes, atomic_write_text
+from gpme_io.atomic import atomic_write_bytes, atomic_write_text
 from gpme_core.errors import GpmeError
 
 from .point import point_key, run_point

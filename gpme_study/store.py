@@ -1,12 +1,12 @@
 """The resume store of a sweep: one small JSON file per finished point,
-``<out>/points/<key>.json``, written atomically (gpme_core.atomic), so an interrupted sweep
+``<out>/points/<key>.json``, written atomically (gpme_io.atomic), so an interrupted sweep
 restarts without recomputing finished points and never finds a half-written one."""
 import json
 from pathlib import Path
 
 import numpy as np
 
-from gpme_core.atomic import atomic_write_text
+from gpme_io.atomic import atomic_write_text
 
 
 def _plain(value):

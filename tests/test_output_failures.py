@@ -3,7 +3,7 @@ naming the file that could not be written and the space left, exit status 74 (EX
 docs/ci.md), nothing half-written, the last good report and ``latest`` unchanged.
 
 Real file systems where the machine allows it (a 64 kB tmpfs, mounted as root; skipped
-otherwise), and the error paths of gpme_core.atomic with the operating system's errors
+otherwise), and the error paths of gpme_io.atomic with the operating system's errors
 injected in-process.
 """
 import errno
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from gpme_core import atomic
+from gpme_io import atomic
 from gpme_core.errors import GpmeError, OutputWriteError
 
 ROOT = Path(__file__).resolve().parents[1]

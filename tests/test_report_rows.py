@@ -280,7 +280,7 @@ def _tiny_figure(*args, **kwargs):
 def test_a_model_run_history_reads_back(tmp_path, monkeypatch, compressed):
     from gpme_io import figures
     from gpme_io.runs import simulate_scenario, write_run_outputs
-    from gpme_core.atomic import HISTORY_DIGITS
+    from gpme_io.atomic import HISTORY_DIGITS
     from gpme_io.modelfile import load_model_file
     monkeypatch.setattr(figures, "FIGURES", {"coordinates.png": _tiny_figure})
     scenario = load_model_file(REPO / "tests" / "data" / "runs" / "point_pendulum.toml")
@@ -299,12 +299,14 @@ def test_a_model_run_history_reads_back(tmp_path, monkeypatch, compressed):
 
 @pytest.mark.parametrize("compressed", [False, True], ids=["simulate-plain", "verify-gzip"])
 def test_the_paper_histories_read_back(tmp_path, monkeypatch, compressed):
-    from gpme_core.atomic import HISTORY_DIGITS
+    from gpme_io.atomic import HISTORY_DIGITS
     from gpme_examples import paper
+    from gpme_io import paper_figures
+    from gpme_io.paper_outputs import write_outputs
     for name in ("joint_coordinates", "end_effector", "constraint_violation"):
-        monkeypatch.setattr(paper.figures, name, _tiny_figure)
+        monkeypatch.setattr(paper_figures, name, _tiny_figure)
     runs = {case: paper.run_case(case, t_end=0.01) for case in ("rigid", "flexible")}
-    paths = paper.write_outputs(runs, tmp_path, compressed=compressed)
+    paths = write_outputs(runs, tmp_path, compressed=compressed)
     for case, df in runs.items():
         back = pd.read_csv(paths[f"{case}.csv.gz" if compressed else f"{case}.csv"])
         assert list(back.columns) == list(df.columns) and len(back) == len(df)
@@ -324,7 +326,7 @@ def _pixels(data):
 def test_a_line_plot_is_stored_with_a_palette_and_looks_the_same():
     import matplotlib.figure
 
-    from gpme_core.atomic import PNG_COLOURS, PNG_MAX_ERROR, figure_png
+    from gpme_io.png import PNG_COLOURS, PNG_MAX_ERROR, figure_png
     fig = matplotlib.figure.Figure(figsize=(6, 3))
     ax = fig.add_subplot()
     t = np.linspace(0, 2, 500)
@@ -346,7 +348,7 @@ def test_a_line_plot_is_stored_with_a_palette_and_looks_the_same():
 def test_an_image_a_palette_cannot_hold_is_kept_exactly(mode):
     from PIL import Image
 
-    from gpme_core.atomic import compact_png
+    from gpme_io.png import compact_png
     rng = np.random.default_rng(3)
     noise = rng.integers(0, 256, size=(40, 50, len(mode)), dtype=np.uint8)
     buf = io.BytesIO()

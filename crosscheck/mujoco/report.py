@@ -3,7 +3,7 @@ MuJoCo crosscheck (crosscheck/reports/templates/engine.html.j2)."""
 import numpy as np
 from matplotlib.figure import Figure
 
-from gpme_core.atomic import atomic_save_figure
+from gpme_io.atomic import atomic_save_figure
 from gpme_io.file_names import file_stem
 
 from ..compare import FAIL, INFO, row_status

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from gpme_core.atomic import atomic_save_figure
+from gpme_io.atomic import atomic_save_figure
 
 from .rows import check_id
 from .run_diff import row_ratios

@@ -28,7 +28,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Optional
 
-from gpme_core.atomic import atomic_write_bytes
+from gpme_io.atomic import atomic_write_bytes
 from gpme_io.xml_text import make_tree_safe, xml_safe_text
 
 _NOT_NAME = re.compile(r"[^A-Za-z0-9_]+")

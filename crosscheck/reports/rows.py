@@ -18,7 +18,7 @@ CONTRACT (the HTML pages depend on it; the storage layout behind it may change):
   crosscheck.compare (engine, model, quantity, case, entry, gpme_value, engine_value,
   abs_error, rel_error, scale, tol_abs, tol_rel, status, passed, reason, section).
 
-STORAGE (in a run directory; every file written atomically, gpme_core.atomic):
+STORAGE (in a run directory; every file written atomically, gpme_io.atomic):
 - ``checks/<engine>/<check_id>.csv.gz``: the rows of one check (after :func:`normalise`),
   each row once, gzip-compressed CSV; the wide table's columns in its order except that
   ``tol_abs, tol_rel, reason`` are replaced by ``tol_id`` (at tol_abs's place).

@@ -14,7 +14,7 @@ import re
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
-from gpme_core.atomic import atomic_write_text
+from gpme_io.atomic import atomic_write_text
 
 from .run_diff import headline
 

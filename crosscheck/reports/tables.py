@@ -7,7 +7,7 @@ one was.  The HTML itself comes from templates (crosscheck.reports.html).
 import numpy as np
 import pandas as pd
 
-from gpme_core.atomic import atomic_write_bytes, atomic_write_csv, atomic_write_text  # noqa: F401
+from gpme_io.atomic import atomic_write_bytes, atomic_write_csv, atomic_write_text  # noqa: F401
 
 from ..compare import FAIL, INFO, PASS, STATUSES, row_status
 

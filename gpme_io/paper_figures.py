@@ -1,8 +1,9 @@
-"""Figures of a programmed-motion run, after the paper's Figs. 2 and 3 (matplotlib).
+"""Figures of the paper's crane runs, after the paper's Figs. 2 and 3 (matplotlib).
 
 Each function takes run DataFrames from gpme_core.integrate.simulate keyed by a case
 label and returns a matplotlib Figure (object API: no pyplot state, no backend is
-switched); the caller saves or embeds it.
+switched); gpme_io.paper_outputs saves them.  Figures of any scenario's run are
+gpme_io.figures.
 """
 import numpy as np
 from matplotlib.figure import Figure

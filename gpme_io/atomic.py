@@ -1,10 +1,14 @@
 """Atomic file writing: a temporary file in the target directory moved into place with
-os.replace, so an interrupted run never leaves a half-written file where a good one was."""
+os.replace, so an interrupted run never leaves a half-written file where a good one was.
+Text, bytes, CSV tables and matplotlib figures (as compact PNGs, gpme_io.png); the engine
+(gpme_core) writes no files, it returns data (issue 25)."""
 import os
 import tempfile
 from pathlib import Path
 
-from .errors import OutputWriteError
+from gpme_core.errors import OutputWriteError
+
+from .png import figure_png
 
 
 def atomic_write_bytes(path, data):
@@ -41,7 +45,7 @@ def atomic_write_text(path, text):
 
 
 # Significant digits of the run histories in a verify report (compressed=True of
-# gpme_examples.paper.write_outputs and gpme_io.runs.write_run_outputs; `gpme simulate` keeps
+# gpme_io.paper_outputs.write_outputs and gpme_io.runs.write_run_outputs; `gpme simulate` keeps
 # full precision).  The rounding, at most 5e-14 relative, is below what halving the step
 # changes in every column of the paper's 10 s runs but three that agree to round-off
 # (end-effector height, column angle, drive work; 2e-15..5e-14): measured
@@ -69,51 +73,6 @@ def atomic_write_csv(df, path, significant_digits=None):
                                                mtime=0))
     else:
         atomic_write_text(path, text)
-
-
-# A figure's PNG is re-encoded with an adaptive palette of PNG_COLOURS colours when no
-# pixel channel moves by more than PNG_MAX_ERROR (of 255): line plots are a few exact
-# colours (background, lines, text) plus anti-aliased edges, and MAXCOVERAGE keeps the
-# frequent colours exact, so only edge pixels move, by a few levels.  Measured on the
-# verify report's 25 figures: 2.6-3.1x smaller, largest channel error 1-17, mean < 0.9.
-PNG_COLOURS = 256
-PNG_MAX_ERROR = 24
-
-
-def compact_png(data: bytes) -> bytes:
-    """The PNG ``data`` re-encoded smaller without visible loss: an opaque image through an
-    adaptive palette (PNG_COLOURS, no dithering) when it changes no channel of any pixel
-    by more than PNG_MAX_ERROR, else losslessly; always with zlib's best compression.
-    Returns ``data`` itself when that is smaller."""
-    import io
-
-    import numpy as np
-    from PIL import Image
-    with Image.open(io.BytesIO(data)) as image:
-        image.load()
-        dpi = image.info.get("dpi")
-        pixels = np.asarray(image.convert("RGBA"))
-    if (pixels[..., 3] == 255).all():
-        rgb = Image.fromarray(np.ascontiguousarray(pixels[..., :3]))
-        palette = rgb.quantize(PNG_COLOURS, method=Image.Quantize.MAXCOVERAGE,
-                               dither=Image.Dither.NONE)
-        error = np.abs(np.asarray(palette.convert("RGB"), dtype=np.int16)
-                       - pixels[..., :3].astype(np.int16))
-        out = palette if int(error.max()) <= PNG_MAX_ERROR else rgb
-    else:                         # transparency: kept as it is, losslessly
-        out = Image.fromarray(pixels)
-    buf = io.BytesIO()
-    out.save(buf, format="PNG", optimize=True, **({"dpi": dpi} if dpi else {}))
-    smaller = buf.getvalue()
-    return smaller if len(smaller) < len(data) else data
-
-
-def figure_png(fig, dpi=120) -> bytes:
-    """A matplotlib figure as compact PNG bytes (:func:`compact_png`), tight bounding box."""
-    import io
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    return compact_png(buf.getvalue())
 
 
 def atomic_save_figure(fig, path, dpi=120):
