@@ -75,6 +75,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
     """The paper's two crane runs, with the paper's figures (default run)."""
     from gpme_examples import paper
     from gpme_io.paper_outputs import write_outputs
+    from gpme_io.progress import progress_callback
     from gpme_io.scenario import crane_scenario
     from .run_checks import rows_frame, run_rows
     t_end = paper.QUICK_T_END if quick else paper.T_END
@@ -82,7 +83,7 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
     for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
         _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
              f"{paper.DEFAULT_DT[case]:g} s)")
-        runs[case] = paper.run_case(case, t_end=t_end, progress=progress,
+        runs[case] = paper.run_case(case, t_end=t_end, progress=progress_callback(progress),
                                     max_wall_s=max_wall_s)
         _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
         rows += run_rows(crane_scenario(n), runs[case])

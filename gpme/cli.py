@@ -105,6 +105,7 @@ def _simulate_paper(args):
     from gpme_io.budget import run_budget, wall_limit
     from gpme_examples import paper
     from gpme_io.paper_outputs import write_outputs
+    from gpme_io.progress import progress_callback
     from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     t_end = args.t_end or (paper.QUICK_T_END if args.quick else paper.T_END)
@@ -121,7 +122,7 @@ def _simulate_paper(args):
 
         def run(dt, case=case, label=label, settings=settings):
             df = paper.run_case(case, dt=args.dt if dt is None else dt,
-                                progress=not args.no_progress,
+                                progress=progress_callback(not args.no_progress),
                                 before_run=run_budget(label, args.force),
                                 max_wall_s=wall_limit(args.force), **settings)
             print(f"  wall time {df.attrs['wall_time_s']:.1f} s", flush=True)

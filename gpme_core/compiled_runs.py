@@ -44,7 +44,7 @@ def run_compiled(method, compiled, partition, t_end, y0, dt, record_every, bar,
     partition     : gpme_core.integrate.RunPartition (switched here when the kernel asks)
     dt            : s, the step; t_end = n_steps dt
     record_every  : steps between recorded rows
-    bar           : gpme_core.integrate.Progress
+    bar           : the run's progress reporter (gpme_core.integrate._Reporter: update(step))
     wall_check    : callable(t) raising when the run has taken too long
     raise_state_error: callable(t, y, dt) raising the error of a state that diverged or left
                     its range (gpme_core.integrate._check_state)

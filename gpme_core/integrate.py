@@ -29,6 +29,7 @@ from .compiled_runs import COMPILED_METHODS, run_compiled
 from .gpme import SWITCH_RCOND, partition_rcond
 from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_METHODS,
                       METHODS)
+from .progress import Progress
 from .run_cost import estimate_run, time_evaluation
 from .singular_approach import approach
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
@@ -46,8 +47,6 @@ MESSAGE_ENTRIES = 6
 SCIPY_PROGRESS_UNITS = 1000
 # evaluations between two looks at the clock (progress and the wall-time limit)
 WALL_CHECK_EVERY = 200
-# s between two progress lines when stderr is not a terminal
-LOG_LINE_SECONDS = 30.0
 # a recorded history above this many bytes in memory is refused before the run
 MAX_HISTORY_BYTES = 4 * 2 ** 30
 
@@ -160,7 +159,7 @@ def _rk4(rhs, model, t_end, y0, dt, record_every, n, progress, partition=None,
     n_steps = int(round(t_end / dt))
     ts, ys = [0.0], [y0.copy()]
     y = y0.copy()
-    bar = Progress(progress, n_steps, t_end, "RK4")
+    bar = _Reporter(progress, n_steps, t_end, "RK4")
     try:
         for k in range(n_steps):
             t = k * dt
@@ -192,7 +191,7 @@ def _run_compiled(method, compiled, partition, t_end, y0, dt, record_every, prog
     """(times, states, evaluations) of a fixed-step run in the compiled loops, with the
     errors of the Python path (gpme_core.compiled_runs)."""
     model, n = partition.system.model, compiled.n
-    bar = Progress(progress, int(round(t_end / dt)), t_end, method)
+    bar = _Reporter(progress, int(round(t_end / dt)), t_end, method)
 
     def on_error(t_good, y_good, exc):
         _raise_if_singular(partition.system, t_good, y_good, y0, t_end, exc)
@@ -282,53 +281,37 @@ def _check_wall(start, max_wall_s, t, t_end, method):
             "stable step otherwise), or lift the limit (--force)")
 
 
-class Progress:
-    """Progress of a run over ``total`` steps up to ``t_end`` s: a tqdm bar on a terminal;
-    elsewhere (CI logs, files) at most one line per tenth of the run and per
-    LOG_LINE_SECONDS, so a log never gets hundreds of progress lines (a short run: none).  ``progress=False``: silent.  The rate is measured from the
-    first step on (compilation happens before: gpme_core.run_cost.time_evaluation)."""
+class _Reporter:
+    """A run's progress over ``total`` units (steps, or parts of t_end) up to ``t_end`` s,
+    sent to ``callback`` as gpme_core.progress.Progress events (None: nothing is sent; see
+    that module for when).  ``start`` is the wall clock of the run, read by the wall-time
+    limit too; compilation happens before it (gpme_core.run_cost.time_evaluation)."""
 
-    def __init__(self, progress, total, t_end, label):
-        import sys
-        self.total, self.t_end, self.label = total, t_end, label
-        self.bar, self.lines, self.next_tenth = None, progress, 1
+    def __init__(self, callback, total, t_end, method):
+        self.callback, self.total, self.t_end, self.method = callback, total, t_end, method
         self.start, self.done = time.perf_counter(), 0
-        self.last_line = self.start
-        if progress and sys.stderr.isatty():
-            from tqdm import tqdm
-            self.bar = tqdm(total=total, unit="step", desc=label, leave=False,
-                            mininterval=1.0)
-            self.lines = False
+        self._send(0, False)
+
+    def _send(self, done, finished):
+        if self.callback is not None:
+            self.callback(Progress(self.method, done, self.total,
+                                   self.t_end * done / max(self.total, 1), self.t_end,
+                                   time.perf_counter() - self.start, finished))
 
     def update(self, done):
-        if self.bar is not None:
-            if done - self.done >= 1000 or done == self.total:
-                self.bar.update(done - self.done)
-                self.done = done
-        elif self.lines and done * 10 >= self.next_tenth * self.total:
-            import sys
-            self.next_tenth = int(done * 10 // self.total) + 1
-            now = time.perf_counter()
-            if now - self.last_line < LOG_LINE_SECONDS:
-                return
-            self.last_line = now
-            elapsed = now - self.start
-            left = elapsed * (self.total - done) / max(done, 1)
-            print(f"  {self.label}: {100 * done / self.total:3.0f} % (t = "
-                  f"{self.t_end * done / self.total:.4g} of {self.t_end:.4g} s), "
-                  f"{elapsed:.0f} s elapsed, ~{left:.0f} s left", file=sys.stderr, flush=True)
+        self.done = done
+        self._send(done, False)
 
     def close(self):
-        if self.bar is not None:
-            self.bar.close()
+        self._send(self.done, True)
 
 
 def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=None,
-           progress=False, max_wall_s=None, last_good=None):
+           progress=None, max_wall_s=None, last_good=None):
     """(times, states, evaluations) of a solve_ivp run; ``last_good`` (a list, or None) is
     set to [t, y] of the last state evaluated without an error."""
     t_eval = np.linspace(0.0, t_end, int(round(t_end / output_dt)) + 1)
-    bar = Progress(progress, SCIPY_PROGRESS_UNITS, t_end, method)
+    bar = _Reporter(progress, SCIPY_PROGRESS_UNITS, t_end, method)
     start = time.perf_counter()
     calls = [0, 0]          # evaluations, progress units reached
 
@@ -367,7 +350,7 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
 
 
 def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
-             rtol=1e-8, atol=1e-10, on_manifold=False, progress=False,
+             rtol=1e-8, atol=1e-10, on_manifold=False, progress=None,
              switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
              estimate_only=False, max_wall_s=None, compiled=True):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
@@ -384,8 +367,11 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                  UnstableStepError too, whatever this flag.
     before_run : None or a callable given the run's gpme_core.run_cost.RunCost (wall time,
                  history size; one evaluation timed after compilation) before the first
-                 step; it may raise to refuse the run (the CLI's budget does).  With
-                 ``progress`` the first call's numba compilation is announced on stderr.
+                 step; it may raise to refuse the run (the CLI's budget does).
+    progress   : None (silent) or a callable given the run's events
+                 (gpme_core.progress.ProgressCallback): the first call's numba compilation
+                 (Compiling) and where the run is (Progress).  The engine prints nothing;
+                 gpme_io.progress draws them on a terminal or in a log.
     estimate_only: check the inputs and the step, then return the RunCost without running
     max_wall_s : s, stop the run with a SimulationError once it has taken this long (None:
                  no limit); the guard for methods whose cost is not known before the run
@@ -453,6 +439,9 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
             problems.append(f"{label} must be finite, got {arr.tolist()}")
     if method not in METHODS:
         problems.append(f"method must be one of {METHODS}, got {method!r}")
+    if progress is not None and not callable(progress):
+        problems.append(f"progress must be None or a callable taking gpme_core.progress "
+                        f"events, got {progress!r}")
     if "t_end" not in not_numbers and not (np.isfinite(t_end) and t_end > 0):
         problems.append(f"t_end must be positive (s), got {t_end!r}")
     if not dt_ok:
@@ -494,8 +483,8 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
         compiled, not_compiled = (for_system(start_system) if use_compiled else
                                   (None, "compiled=False"))
     seconds_per_eval = None
-    if progress or before_run is not None:      # compiles first, announced, then times
-        seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=progress,
+    if progress is not None or before_run is not None:   # compiles first, reported, times
+        seconds_per_eval = time_evaluation(start_system, q0, q_dot0, progress=progress,
                                            compiled=compiled)[1]
     limit = None
     if method == "RK4" and (dt is None or check_step) or (
@@ -516,8 +505,7 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                                          output_dt)
     if before_run is not None or estimate_only:
         if seconds_per_eval is None:
-            seconds_per_eval = time_evaluation(start_system, q0, q_dot0, announce=False,
-                                               compiled=compiled)[1]
+            seconds_per_eval = time_evaluation(start_system, q0, q_dot0, compiled=compiled)[1]
         if limit is None and method in EXPLICIT_ADAPTIVE_METHODS:
             limit = rk4_limit(start_system, 0.0, q0, q_dot0)[0]
         cost = estimate_run(method, t_end, output_dt, n, history_columns(start_system),

@@ -7,7 +7,6 @@ stability step by the stiffest mode whatever its tolerance; Radau's steps follow
 control and are not known before the run, so only its rows are counted), times the cost of
 one evaluation measured on this machine after the numba kernels are compiled.
 """
-import sys
 import time
 from dataclasses import dataclass
 from typing import Optional
@@ -15,6 +14,7 @@ from typing import Optional
 import numpy as np
 
 from .methods import DOP853, EXPLICIT_ADAPTIVE_METHODS, RADAU, RADAU_IIA, RK4, RK45
+from .progress import Compiling
 
 # evaluations of the right-hand side per step of each method
 # RadauIIA: 3 stages x 2-3 Newton passes plus a Jacobian (2n + 1 evaluations) every ~30
@@ -120,39 +120,39 @@ def kernels_compiled(compiled=None):
     return done and (compiled is None or bool(compiled.module.evaluate.signatures))
 
 
-def time_evaluation(system, q0, q_dot0, announce=True, compiled=None):
+def time_evaluation(system, q0, q_dot0, progress=None, compiled=None):
     """(compile_s, seconds_per_eval): the first reduced solve at (0, q0, q_dot0) timed on its
     own (it compiles the numba kernels, or loads them from their cache, when this process has
-    not yet; with ``announce`` that is said on stderr before it starts), then the median over
-    TIMED_BATCHES batches of TIMED_EVALUATIONS more.
+    not yet), then the median over TIMED_BATCHES batches of TIMED_EVALUATIONS more.
 
     system   : gpme_core.gpme.ProgrammedMotion with its dependent coordinates set
+    progress : None or a callable (gpme_core.progress.ProgressCallback) told of a compilation
+               before it starts and after it ends (gpme_core.progress.Compiling)
     compiled : None (the Python path's ProgrammedMotion.solve is timed) or the run's
                gpme_core.compiled.CompiledSystem, whose fused evaluation is timed instead
                (its first call compiles gpme_core.kernels; called from Python, so it costs
                ~3 us more than inside the compiled loops: a cautious estimate)
     """
     if compiled is None:
-        return _timed(system, q0, q_dot0, announce, None)
+        return _timed(system, q0, q_dot0, progress, None)
     # timed as the compiled runs go: BLAS on one thread (gpme_core.compiled); outside the
     # block, OpenBLAS's pools (numpy's and SciPy's) waited on each other after the Python
     # path's first solve: a 500-link chain timed 555 ms per evaluation instead of 3 ms,
     # and its run was estimated at 30.6 min for 8.8 s
     from .compiled import single_threaded_blas
     with single_threaded_blas():
-        return _timed(system, q0, q_dot0, announce, compiled)
+        return _timed(system, q0, q_dot0, progress, compiled)
 
 
-def _timed(system, q0, q_dot0, announce, compiled):
+def _timed(system, q0, q_dot0, progress, compiled):
     """time_evaluation's measurement (see there)."""
     if compiled is not None:
         solve = compiled.accelerator(system.ic, system.dc)
     else:
         solve = system.solve
-    compiling = not kernels_compiled(compiled)
-    if compiling and announce:
-        print("compiling the numba kernels (first call in this process; cached on disk "
-              "for the next) ...", file=sys.stderr, flush=True)
+    reported = progress is not None and not kernels_compiled(compiled)
+    if reported:
+        progress(Compiling(finished=False))
     start = time.perf_counter()
     system.solve(0.0, q0, q_dot0)
     if compiled is not None:
@@ -161,8 +161,8 @@ def _timed(system, q0, q_dot0, announce, compiled):
         except RuntimeError:            # the compiled evaluation fails where the Python
             solve = system.solve        # one does not: time the Python one (cautious)
     first = time.perf_counter() - start
-    if compiling and announce:
-        print(f"  compiled in {first:.1f} s", file=sys.stderr, flush=True)
+    if reported:
+        progress(Compiling(finished=True, wall_s=first))
     batches = []
     for _ in range(TIMED_BATCHES):
         start = time.perf_counter()

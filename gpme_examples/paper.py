@@ -17,13 +17,14 @@ DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 
 def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=T_END, dt=None, method="RK4", on_manifold=False,
-             params=CraneParameters(), progress=False, output_dt=1e-3, static_arm=False,
+             params=CraneParameters(), progress=None, output_dt=1e-3, static_arm=False,
              before_run=None, estimate_only=False, max_wall_s=None):
     """One run of the paper: case 'rigid' or 'flexible'; returns the history DataFrame.
     static_arm: start the flexible arm in its gravity sag instead of straight.
     dt: s, RK4 step (default DEFAULT_DT up to DEFAULT_N_RFE segments, else half the
     stability limit, gpme_core.stability); with an adaptive method its largest step.
-    before_run, estimate_only, max_wall_s: as gpme_core.integrate.simulate."""
+    progress, before_run, estimate_only, max_wall_s: as gpme_core.integrate.simulate
+    (progress: None or a callable given the run's events; gpme_io.progress draws them)."""
     n = 0 if case == "rigid" else n_rfe
     system = crane_system(n, params)
     q0, qd0 = initial_state(system.model, params, static_arm=static_arm and n > 0)

@@ -9,6 +9,7 @@ from gpme_core.errors import ModelError
 from gpme_core.integrate import simulate, suggest_rk4_step
 from gpme_core.methods import METHODS, RADAU_IIA, RK4
 from gpme_io.file_names import named_path
+from gpme_io.progress import progress_callback
 
 from . import figures
 
@@ -33,6 +34,8 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
              file's when it chose RadauIIA, else gpme_core.integrate.RADAU_IIA_STEP
     method : one of gpme_core.methods.METHODS, default the scenario's integrator; with an
              adaptive method a given dt is its largest step
+    progress : True (a bar on a terminal, a few lines in a log: gpme_io.progress), False
+             (silent) or a callable given the run's events (gpme_core.progress)
     before_run, estimate_only, max_wall_s : as gpme_core.integrate.simulate
     """
     method = method or scenario.integrator
@@ -47,8 +50,8 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
     else:
         step = dt
     df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
-                  output_dt=out_dt, progress=progress, dt=step, before_run=before_run,
-                  estimate_only=estimate_only, max_wall_s=max_wall_s)
+                  output_dt=out_dt, progress=progress_callback(progress), dt=step,
+                  before_run=before_run, estimate_only=estimate_only, max_wall_s=max_wall_s)
     if estimate_only:
         return df
     df.attrs["scenario"] = scenario.name

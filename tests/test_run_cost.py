@@ -40,6 +40,5 @@ def test_time_evaluation_is_positive_and_finite():
     system = crane_system(0, params)
     system = system.with_dependent(system.pivoted_dependent(0.0, *initial_state(system.model,
                                                                                 params)))
-    first, per_eval = time_evaluation(system, *initial_state(system.model, params),
-                                      announce=False)
+    first, per_eval = time_evaluation(system, *initial_state(system.model, params))
     assert np.isfinite(per_eval) and 0 < per_eval < 1.0 and first > 0
