@@ -1,14 +1,18 @@
 """One direction of dependence between gpme's packages (issue 25, docs/architecture.md).
 
-The contract is pyproject.toml's [tool.importlinter]: gpme (command line) > gpme_study >
-crosscheck > gpme_io > gpme_examples > gpme_core; a package imports only packages below
-it, imports inside functions included.  import-linter checks it here; a planted contract
-that puts the engine above the model io must be reported broken (the check can fail), and
-tools/import_graph.py (the printed graph) must agree that no two packages import each other.
+The contracts are pyproject.toml's [tool.importlinter]: gpme (command line) > gpme_study >
+crosscheck > gpme_io > gpme_examples > gpme_core, a package importing only packages below
+it, imports inside functions included; and the engine (gpme_core) imports no tqdm, PIL or
+matplotlib (it returns data: bars and figures are gpme_io's).  import-linter checks them
+here; planted contracts that the code breaks (the engine placed above the model io, gpme_io
+forbidden the engine or the plotting packages) must be reported broken (the check can
+fail), and tools/import_graph.py (the printed graph) must agree that no two packages import
+each other.
 """
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -24,10 +28,21 @@ def _lint(*args):
                           text=True, timeout=300)
 
 
-def test_the_layers_contract_is_kept():
+def _contracts():
+    with open(ROOT / "pyproject.toml", "rb") as fh:
+        return tomllib.load(fh)["tool"]["importlinter"]["contracts"]
+
+
+def test_every_contract_is_kept():
+    """The layers and the engine's forbidden packages, both checked and both kept."""
+    contracts = _contracts()
+    assert sorted(c["type"] for c in contracts) == ["forbidden", "layers"]
+    forbidden = next(c for c in contracts if c["type"] == "forbidden")
+    assert forbidden["source_modules"] == ["gpme_core"]
+    assert {"tqdm", "PIL", "matplotlib"} <= set(forbidden["forbidden_modules"])
     done = _lint()
     assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-2000:]
-    assert "1 kept, 0 broken" in done.stdout
+    assert f"Contracts: {len(contracts)} kept, 0 broken." in done.stdout
 
 
 def test_a_planted_upward_dependence_is_reported(tmp_path):
@@ -40,6 +55,24 @@ def test_a_planted_upward_dependence_is_reported(tmp_path):
     done = _lint("--config", str(config))
     assert done.returncode != 0
     assert "BROKEN" in done.stdout and "gpme_io." in done.stdout and "-> gpme_core." in done.stdout
+
+
+@pytest.mark.parametrize("forbidden, imported", [
+    (["gpme_core"], "-> gpme_core."),                     # a project package
+    (["tqdm", "PIL", "matplotlib"], "-> matplotlib"),     # packages outside the project
+], ids=["engine", "plotting"])
+def test_a_planted_forbidden_import_is_reported(tmp_path, forbidden, imported):
+    """The forbidden contract's form on imports the code has (gpme_io imports the engine,
+    and draws figures and bars): broken, naming an import."""
+    config = tmp_path / "planted.toml"
+    config.write_text('[tool.importlinter]\nroot_packages = ["gpme_io", "gpme_core"]\n'
+                      'include_external_packages = true\n\n'
+                      '[[tool.importlinter.contracts]]\nname = "planted"\ntype = "forbidden"\n'
+                      'source_modules = ["gpme_io"]\n'
+                      f'forbidden_modules = {forbidden!r}\n'.replace("'", '"'))
+    done = _lint("--config", str(config))
+    assert done.returncode != 0
+    assert "BROKEN" in done.stdout and "gpme_io." in done.stdout and imported in done.stdout
 
 
 def test_the_printed_graph_has_no_package_cycle():
