@@ -1,10 +1,14 @@
 """Output directories: whether a path can be one (checked before any work, creating nothing),
-and one writer per output directory: an advisory lock (fcntl.flock on <dir>/.gpme.lock) held
-while a command writes there, so two runs never interleave their files in one place.  The
+and one writer per output directory: a lock on <dir>/.gpme.lock held while a command writes
+there, so two runs never interleave their files in one place.
+
+The lock is filelock's FileLock (a well-kept, portable library: flock on POSIX, msvcrt on
+Windows, instead of the fcntl-only lock this module had), taken without waiting; the
 operating system releases it when the process ends, however it ends (no stale lock after a
-kill); the lock file names the holder for the message of the one refused.  Whoever takes
-the lock removes the temporary files (``.*.tmp``, gpme_io.atomic) that a killed writer
-left at the top of the directory."""
+kill).  The holder (pid, host, start time) is written beside it in <dir>/.gpme.lock.holder
+for the message of the one refused (not into the lock file itself: a refused FileLock may
+truncate it).  Whoever takes the lock removes the temporary files (``.*.tmp``,
+gpme_io.atomic) that a killed writer left at the top of the directory."""
 import contextlib
 import json
 import os
@@ -12,58 +16,78 @@ import socket
 import time
 from pathlib import Path
 
+from filelock import FileLock, Timeout
+
 from gpme_core.errors import GpmeError
 
 LOCK_NAME = ".gpme.lock"
+HOLDER_NAME = ".gpme.lock.holder"
 
 
 class OutputBusyError(GpmeError):
     """Another gpme process is writing to the same output directory."""
 
 
+def _busy_message(directory, flag):
+    return (f"{flag} {str(directory)!r} is being written by another gpme run "
+            f"({_holder(Path(directory) / HOLDER_NAME)}); wait for it to finish or give "
+            f"another {flag}")
+
+
+def _lock(path):
+    """A FileLock on ``path`` that one process cannot take twice (not reentrant: a second
+    writer in the same process is refused like one in another)."""
+    # the lock file stays (deleting it on release races with a process that opened it);
+    # no soft fallback (a bare lock file left by a killed process would block every run)
+    return FileLock(str(path), timeout=0, is_singleton=False, thread_local=False,
+                    preserve_lock_file=True, fallback_to_soft=False)
+
+
 @contextlib.contextmanager
 def exclusive_output(directory, flag="--out"):
     """Hold the lock of ``directory`` (made if missing) for the ``with`` block; raises
     OutputBusyError naming the holder when another process holds it."""
-    import fcntl
     path = Path(directory) / LOCK_NAME
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    lock = _lock(path)
     try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = _holder(path)
-            raise OutputBusyError(
-                f"{flag} {str(directory)!r} is being written by another gpme run ({holder}); "
-                f"wait for it to finish or give another {flag}") from None
+        lock.acquire(timeout=0)
+    except Timeout:
+        raise OutputBusyError(_busy_message(directory, flag)) from None
+    try:
         for stale in Path(directory).glob(".*.tmp"):      # gpme_io.atomic's temporary
             stale.unlink(missing_ok=True)   # files of a killed writer: no writer is alive now
-        os.ftruncate(fd, 0)
-        os.write(fd, json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
-                                 "started": time.strftime("%Y-%m-%d %H:%M:%S")}).encode())
+        _write_holder(Path(directory) / HOLDER_NAME)
         yield
     finally:
-        os.close(fd)        # releases the lock
+        lock.release()
+
+
+def _write_holder(path):
+    """The holder's pid, host and start time, for the message of a refused writer; best
+    effort (on a full disk the run's own writes say what failed)."""
+    try:
+        path.write_text(json.dumps({"pid": os.getpid(), "host": socket.gethostname(),
+                                    "started": time.strftime("%Y-%m-%d %H:%M:%S")}))
+    except OSError:
+        pass
 
 
 def busy_problem(directory, flag="--out"):
     """The message of :class:`OutputBusyError` when another process holds ``directory``'s
     lock now, else None; creates nothing (a check made before any work, e.g. a sweep's
     cost estimate; :func:`exclusive_output` still takes the lock for the writing)."""
-    import fcntl
     path = Path(directory) / LOCK_NAME
+    if not path.is_file():
+        return None
+    lock = _lock(path)
     try:
-        fd = os.open(path, os.O_RDWR)
+        lock.acquire(timeout=0)
+    except Timeout:
+        return _busy_message(directory, flag)
     except OSError:
-        return None                   # no lock file (or unreadable: exclusive_output says)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return (f"{flag} {str(directory)!r} is being written by another gpme run "
-                f"({_holder(path)}); wait for it to finish or give another {flag}")
-    finally:
-        os.close(fd)                  # releases the lock if it was taken
+        return None                   # unreadable: exclusive_output will say
+    lock.release()
     return None
 
 
