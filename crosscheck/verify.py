@@ -24,11 +24,8 @@ is in summary.json ("diff"), at the top of index.html and printed at the end.  F
 summary of the run (crosscheck.reports.junit, crosscheck.reports.summary_md; docs/ci.md).
 """
 import json
-import os
 import shutil
-import socket
 import sys
-import tempfile
 import time
 import traceback
 from pathlib import Path
@@ -37,11 +34,12 @@ import pandas as pd
 
 from gpme_core.errors import OutputWriteError
 from gpme_io.modelfile import load_model_files
-from gpme_io.out_lock import exclusive_output, output_file_problem
+from gpme_io.out_lock import output_file_problem
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .crane_cases import crane_cases
 from .engines import missing_message
+from . import run_store
 from . import rfem_reference
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
@@ -52,13 +50,6 @@ from .verify_meta import environment
 STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
 OPTIONAL_STEPS = ("drake", "exudyn")      # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
-PARTIAL_SUFFIX = ".partial"
-OWNER_FILE = ".owner.json"
-# s: a staging directory without a readable owner (or from another host) older than this is
-# taken as dead
-STALE_AFTER_S = 2 * 86400.0
-
-
 def _say(msg):
     print(msg, flush=True)
 
@@ -190,98 +181,6 @@ def _crash_row(step, exc):
         "status": "fail", "reason": f"{exc}"[:500]}])
 
 
-def _claim_run_dir(root, run_id):
-    """A fresh hidden staging directory root/.<run_id>.*.partial (mkdtemp: unique even for
-    runs started in the same second) with an owner file naming this process (so that a
-    later run can tell a dead run's leftovers from a live run's); _publish picks the final
-    name."""
-    staging = None
-    try:
-        root.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{run_id}.", suffix=PARTIAL_SUFFIX, dir=root))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would hide the report from others
-        atomic_write_text(staging / OWNER_FILE, json.dumps({"pid": os.getpid(),
-                                                            "host": socket.gethostname()}))
-    except OSError as exc:
-        if staging is not None:
-            shutil.rmtree(staging, ignore_errors=True)
-        if isinstance(exc, OutputWriteError):
-            raise
-        raise OutputWriteError(staging or root, exc) from None
-    return staging
-
-
-def _owner_alive(staging):
-    """Whether the run that made ``staging`` may still be running: its process exists on this
-    host (or it belongs to another host, or says nothing, and is younger than STALE_AFTER_S)."""
-    try:
-        owner = json.loads((staging / OWNER_FILE).read_text())
-        pid, host = int(owner["pid"]), owner["host"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return time.time() - staging.stat().st_mtime < STALE_AFTER_S
-    if host != socket.gethostname():
-        return time.time() - staging.stat().st_mtime < STALE_AFTER_S
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:       # exists, another user's
-        return True
-    return True
-
-
-def remove_dead_partials(root):
-    """Remove root/.*.partial staging directories whose run is dead (killed with SIGKILL, a
-    power cut: a run that could clean up did); returns their names."""
-    removed = []
-    for staging in sorted(Path(root).glob(f".*{PARTIAL_SUFFIX}")):
-        if staging.is_dir() and not _owner_alive(staging):
-            shutil.rmtree(staging, ignore_errors=True)
-            removed.append(staging.name)
-    return removed
-
-
-def _run_dirs(root):
-    """Published run directories of root (those with a summary.json), oldest first."""
-    runs = [d for d in Path(root).iterdir()
-            if d.is_dir() and not d.is_symlink() and not d.name.startswith(".")
-            and (d / "summary.json").is_file()]
-    return sorted(runs, key=lambda d: (d.stat().st_mtime, d.name))
-
-
-def prune_runs(root, keep):
-    """Keep the ``keep`` newest published runs of root (and whatever `latest` points at);
-    remove the older ones; returns their names."""
-    if keep is None:
-        return []
-    latest = root / "latest"
-    current = latest.resolve() if latest.is_symlink() else None
-    runs = _run_dirs(root)
-    removed = []
-    for d in runs[:max(0, len(runs) - keep)]:
-        if current is not None and d.resolve() == current:
-            continue
-        shutil.rmtree(d, ignore_errors=True)
-        removed.append(d.name)
-    return removed
-
-
-def _publish(root, staging, run_id):
-    """Rename staging to root/run_id (or run_id-2, -3, ... if taken); returns the path."""
-    for k in range(1, 1000):
-        name = run_id if k == 1 else f"{run_id}-{k}"
-        final = root / name
-        try:
-            os.rename(staging, final)      # fails when final exists and is not empty
-            return final, name
-        except OSError:
-            if not final.exists():
-                raise
-    raise FileExistsError(f"no free run directory name for {run_id} in {root}")
-
-
 def _models_record(scenarios):
     """What each scenario is made of, for models.json and the index page."""
     out = []
@@ -308,22 +207,6 @@ def _model_names(scenarios, quick, only=None):
             "constraints": {c for s in scenarios for c in s.system.constraint_names}}
 
 
-def previous_report(root, compare_to=None):
-    """(summary.json document or None, where it was looked for, one-line note or None): the
-    report to diff this run against, read before the run starts: ``compare_to`` (a report
-    directory or its summary.json) or the run root/latest points at."""
-    if compare_to is not None:
-        data, note = run_diff.load_previous(compare_to)
-        return data, str(compare_to), note
-    latest = Path(root) / "latest"
-    if not (latest.is_symlink() or latest.exists()):
-        return None, str(latest), (f"no previous run in {root} ({latest} does not exist): "
-                                   "nothing to compare with")
-    data, note = run_diff.load_previous(latest)
-    target = os.readlink(latest) if latest.is_symlink() else latest.name
-    return data, str(Path(root) / target), note
-
-
 def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None,
                keep=None, max_wall_s=None, compare_to=None):
     """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
@@ -340,17 +223,17 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     only = STEP_ALIASES.get(only, only)
     run_id = run_id or time.strftime("%Y%m%d-%H%M%S") + ("-quick" if quick else "")
     root.mkdir(parents=True, exist_ok=True)
-    previous = previous_report(root, compare_to)
-    for name in remove_dead_partials(root):
+    previous = run_store.previous_report(root, compare_to)
+    for name in run_store.remove_dead_partials(root):
         _say(f"removed {root / name}: the partial directory of a run that died")
-    staging = _claim_run_dir(root, run_id)
+    staging = run_store.claim_run_dir(root, run_id)
     try:
         result = _run_steps(root, staging, run_id, quick, only, progress, scenarios,
                             max_wall_s, previous)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
-    for name in prune_runs(root, keep):
+    for name in run_store.prune_runs(root, keep):
         _say(f"removed {root / name} (--keep {keep})")
     return result
 
@@ -417,10 +300,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     atomic_write_text(staging / "summary.json", strict_json.dumps(document))
     write_index(staging, summary, rows, meta, record, diff=document["diff"],
                 names=_model_names(scenarios, quick, only))
-    (staging / OWNER_FILE).unlink()
-    with exclusive_output(root):            # one publisher at a time: name and `latest`
-        final, run_id = _publish(root, staging, run_id)
-        _point_latest(root, run_id)
+    final = run_store.publish_run(root, staging, run_id)
     return final, summary, rows
 
 
@@ -472,17 +352,6 @@ def _status(record):
 def _num(v):
     v = float(v)
     return None if v != v else v  # NaN -> null in JSON
-
-
-def _point_latest(root, run_id):
-    tmp = root / f".latest.{os.getpid()}.tmp"
-    try:
-        if tmp.is_symlink() or tmp.exists():
-            tmp.unlink()
-        os.symlink(run_id, tmp)
-        os.replace(tmp, root / "latest")
-    except OSError as exc:
-        raise OutputWriteError(root / "latest", exc) from None
 
 
 def estimate_runs(scenarios, quick, force):
