@@ -25,7 +25,6 @@ summary of the run (crosscheck.reports.junit, crosscheck.reports.summary_md; doc
 """
 import json
 import shutil
-import sys
 import time
 import traceback
 from pathlib import Path
@@ -33,8 +32,6 @@ from pathlib import Path
 import pandas as pd
 
 from gpme_core.errors import OutputWriteError
-from gpme_io.modelfile import load_model_files
-from gpme_io.out_lock import output_file_problem
 
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .crane_cases import crane_cases
@@ -275,7 +272,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
             write_rows(normalise(tables[step]), staging, step)   # its row, linked by the index
             _report_crash(staging, step, exc)
         timings[step] = time.perf_counter() - t0
-        failed = int(_failed(tables[step]).sum())
+        failed = int(failed_checks(tables[step]).sum())
         _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
     _merge_prerequisites(staging, tables, prerequisites)
@@ -291,7 +288,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     write_csv(summary, staging / "summary.csv")
     document = {
         "run": meta,
-        "passed": not bool(_failed(summary).any()),
+        "passed": not bool(failed_checks(summary).any()),
         "models": record,
         "warnings": warnings,
         "checks": [_check_record(r) for r in summary.to_dict("records")]}
@@ -327,7 +324,7 @@ def _check_record(r):
             "tol_abs": _num(r["tol_abs"]), "tol_rel": _num(r["tol_rel"]),
             "tolerance": _num(r["tolerance"]),
             "error_over_tolerance": _num(r["error_over_tolerance"]),
-            "status": _status(r), "reason": r["reason"],
+            "status": check_status(r), "reason": r["reason"],
             "crashed": r["quantity"] == CRASH_QUANTITY and r["model"] == "-"}
 
 
@@ -335,14 +332,14 @@ def _text(v):
     return None if v is None or (isinstance(v, float) and v != v) else str(v)
 
 
-def _failed(df):
+def failed_checks(df):
     """Boolean Series: rows (or checks) that failed."""
     if "status" in df.columns and df["status"].notna().all():
         return df["status"] == "fail"
     return ~df["passed"].astype(bool)
 
 
-def _status(record):
+def check_status(record):
     status = record.get("status")
     if isinstance(status, str):
         return status
@@ -375,51 +372,6 @@ def estimate_runs(scenarios, quick, force):
                                                            estimate_only=True))
 
 
-def compare_to_problem(path):
-    """Why ``--compare-to path`` names no report (None when it does; a report whose
-    summary.json turns out unreadable is said in one line of the diff, not refused)."""
-    text = str(path)
-    valid = ("give a gpme verify report directory (e.g. reports/<run-id>, holding "
-             "summary.json) or its summary.json")
-    if not text.strip():
-        return f"--compare-to is empty; {valid}"
-    target = Path(text)
-    if not target.exists():
-        return f"--compare-to {text!r} does not exist; {valid}"
-    if target.is_dir() and not (target / run_diff.SUMMARY_FILE).is_file():
-        return f"--compare-to {text!r} holds no {run_diff.SUMMARY_FILE}; {valid}"
-    return None
-
-
-def flag_problems(args):
-    """Every problem of verify's report flags (--junit-xml, --summary-md, --compare-to)."""
-    problems = []
-    outputs = {flag: getattr(args, attr, None) for flag, attr in
-               (("--junit-xml", "junit_xml"), ("--summary-md", "summary_md"))}
-    for (flag, value), example in zip(outputs.items(), ("gpme-junit.xml", "gpme-summary.md")):
-        if value is not None:
-            problem = output_file_problem(value, flag, example)
-            if problem:
-                problems.append(problem)
-    values = [v for v in outputs.values() if v is not None and str(v).strip()]
-    if len(values) == 2 and Path(values[0]).resolve() == Path(values[1]).resolve():
-        problems.append(f"--junit-xml and --summary-md both name {values[0]!r}; give each "
-                        "its own file")
-    if getattr(args, "compare_to", None) is not None:
-        problem = compare_to_problem(args.compare_to)
-        if problem:
-            problems.append(problem)
-    return problems
-
-
-def _print_problems(problems):
-    if len(problems) == 1:
-        print(f"error: {problems[0]}", file=sys.stderr)
-    else:
-        print(f"error: {len(problems)} problems on the command line:\n" +
-              "\n".join(f"  - {p}" for p in problems), file=sys.stderr)
-
-
 def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
     """Write the JUnit XML and the markdown summary of the run in ``run_dir`` (``document``:
     its summary.json); returns the paths written."""
@@ -432,51 +384,3 @@ def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
         written.append(write_summary_md(summary_md, document,
                                         index_path=str(Path(run_dir) / "index.html")))
     return written
-
-
-def main(args, problems=()):
-    """`gpme verify`: ``problems`` found by the caller (--out, --keep) are listed with the
-    report flags' and the model files' in one message (exit 2)."""
-    from gpme_io.budget import wall_limit
-    from gpme_core.errors import GpmeError
-    scenarios = None
-    problems = list(problems) + flag_problems(args)
-    if getattr(args, "model", None):
-        try:
-            scenarios = load_model_files(args.model)
-            if getattr(args, "only", None) in (None, "mujoco"):
-                from .mujoco.names import scenario_name_problems
-                scenario_name_problems(scenarios)
-        except GpmeError as exc:
-            problems.append(str(exc))
-    only = STEP_ALIASES.get(getattr(args, "only", None), getattr(args, "only", None))
-    if only in OPTIONAL_STEPS and missing_message(only):
-        problems.append(f"--only {only}: {missing_message(only)}")
-    if problems:
-        _print_problems(problems)
-        return 2
-    try:
-        estimate_runs(scenarios, args.quick, getattr(args, "force", False))
-    except GpmeError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    run_dir, summary, _ = run_verify(args.out, quick=args.quick, only=args.only,
-                                     progress=not args.no_progress, scenarios=scenarios,
-                                     keep=getattr(args, "keep", None),
-                                     max_wall_s=wall_limit(getattr(args, "force", False)),
-                                     compare_to=getattr(args, "compare_to", None))
-    cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
-            "worst_rel_error", "status"]
-    status = summary.apply(_status, axis=1)
-    with pd.option_context("display.width", 200, "display.max_rows", 500):
-        print(summary.assign(status=status)[cols].to_string(index=False))
-    n_fail = int(_failed(summary).sum())
-    n_pass, n_info = int((status == "pass").sum()), int((status == "info").sum())
-    document = strict_json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
-    for path in write_ci_outputs(run_dir, document, getattr(args, "junit_xml", None),
-                                 getattr(args, "summary_md", None)):
-        print(f"wrote {path}")
-    print("\n".join(run_diff.diff_lines(document["diff"])))
-    print(f"{len(summary)} checks: {n_pass} passed, {n_fail} failed, {n_info} information "
-          f"only (not gated); report: {run_dir / 'index.html'}")
-    return 1 if n_fail else 0

@@ -265,11 +265,11 @@ def _crosscheck(args):
 
 
 def _verify(args):
-    from crosscheck import verify
+    from gpme import verify_command
     problems = [p for p in (output_dir_problem(args.out),) if p]
     if args.keep is not None and args.keep < 1:
         problems.append(f"--keep must be at least 1 (the run just made), got {args.keep}")
-    return verify.main(args, problems)     # listed with the report flags' and files' problems
+    return verify_command.main(args, problems)   # listed with the flags' and files' problems
 
 
 def _sweep(args):

@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 
 from crosscheck import verify
+from gpme import verify_command
 from gpme_examples import paper
 
 REPO = Path(__file__).resolve().parent.parent
@@ -93,7 +94,7 @@ def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys, tmp_path)
     class Args:
         out, quick, only, no_progress, model = str(root), True, "pinocchio", True, []
         junit_xml, summary_md = str(tmp_path / "r.xml"), str(tmp_path / "r.md")
-    assert verify.main(Args) == 1
+    assert verify_command.main(Args) == 1
     out = capsys.readouterr().out
     assert "1 failed" in out
     # the crashed step: an <error> in the JUnit XML, the verdict first in the markdown
