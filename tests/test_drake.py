@@ -13,8 +13,8 @@ pytest.importorskip("pydrake")
 from crosscheck.drake import check as dc                      # noqa: E402
 from crosscheck.drake import runs as dr                       # noqa: E402
 from crosscheck.drake.model import from_urdf                  # noqa: E402
-from crosscheck.pinocchio.check import QUICK, State, scenario_states   # noqa: E402
 from crosscheck.reports.rows import read_rows                 # noqa: E402
+from crosscheck.states import QUICK, State, scenario_states   # noqa: E402
 from gpme_core.errors import ModelFileError                   # noqa: E402
 from gpme_core.gpme import ProgrammedMotion                   # noqa: E402
 from gpme_core.inertia import RigidBodyInertia, cuboid        # noqa: E402

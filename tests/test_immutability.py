@@ -160,9 +160,9 @@ def test_programmed_motion_is_immutable_like_model():
 
 
 def test_the_pinocchio_check_leaves_the_scenarios_system_alone():
-    """crosscheck.pinocchio.check.scenario_states used to choose the partition on the
-    scenario's own system; it works on a copy now."""
-    from crosscheck.pinocchio.check import QUICK, scenario_states
+    """crosscheck.states.scenario_states (the Pinocchio check's, before) used to choose the
+    partition on the scenario's own system; it works on a copy now."""
+    from crosscheck.states import QUICK, scenario_states
     from gpme_io.scenario import Scenario
     system = ProgrammedMotion(crane_system(0).model, crane_system(0).constraint_specs)
     model = system.model

@@ -14,6 +14,8 @@ from scipy.spatial.transform import Rotation
 from crosscheck.pinocchio import check as pc
 from crosscheck.pinocchio.model import from_gpme
 from crosscheck.reports.rows import read_rows
+from crosscheck.sampling import state_ranges
+from crosscheck.states import FULL, QUICK, random_states, scenario_states, state_counts
 from gpme_core.constraints import JointProgramme, SympyPointConstraint
 from gpme_core.errors import ConstraintError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
@@ -120,7 +122,7 @@ def test_quick_run_passes_on_crane_and_small_arm_and_writes_reports(quick_run):
     assert set(df["quantity"]) == ALL_QUANTITIES
     assert set(df["model"]) == {"crane_flexible_n1", "crane_flexible_n1 (URDF)", "small_arm",
                                 "small_arm (URDF)"}
-    assert (df.groupby("model")["case"].nunique() == pc.QUICK.n_random + pc.QUICK.n_run).all()
+    assert (df.groupby("model")["case"].nunique() == QUICK.n_random + QUICK.n_run).all()
     assert (df["section"] == "terms").all()
     csv = read_rows(out, "pinocchio")
     assert len(csv) == len(df) and list(csv.columns) == list(df.columns)
@@ -155,15 +157,15 @@ def test_unknown_section_is_rejected(tmp_path):
 def test_states_within_limits_and_rfem_ranges():
     s = crane_scenario(1)
     model = s.model
-    lo, hi, rate = pc.state_ranges(model, s.flexible_coordinates, s.q0)
+    lo, hi, rate = state_ranges(model, s.flexible_coordinates, s.q0)
     flex = [model.index(c) for c in s.flexible_coordinates]
     assert len(flex) == 3 and np.allclose(hi[flex] - lo[flex], 0.04) and np.all(rate[flex] == 2.0)
     psi3 = model.index("psi3")
     assert (lo[psi3], hi[psi3]) == (model.lower_limits[psi3], model.upper_limits[psi3])
     psi2, z1 = model.index("psi2"), model.index("z1")        # no limits: +-pi, +-0.2 m
     assert hi[psi2] - lo[psi2] == pytest.approx(2 * np.pi) and hi[z1] - lo[z1] == pytest.approx(0.4)
-    states = pc.random_states(s.system, 20, np.random.default_rng(3), s.t_end,
-                              s.flexible_coordinates, s.q0)
+    states = random_states(s.system, 20, np.random.default_rng(3), s.t_end,
+                           s.flexible_coordinates, s.q0)
     q = np.array([st.q for st in states])
     assert np.all(q >= lo) and np.all(q <= hi)
     assert np.all(q >= model.lower_limits) and np.all(q <= model.upper_limits)
@@ -174,14 +176,14 @@ def test_unsolvable_scenario_stops_after_bounded_draws():
     s = small_scenario()
     system = ProgrammedMotion(s.model, s.constraints[1:], dependent=("yaw",))   # A_dc = 0
     with pytest.raises(ConstraintError, match=r"only 0 of 3 random states .* after 11 draws"):
-        pc.random_states(system, 3, np.random.default_rng(1), 1.0, max_draws=11)
+        random_states(system, 3, np.random.default_rng(1), 1.0, max_draws=11)
 
 
 def test_state_counts_shrink_for_large_models():
-    assert pc.state_counts(pc.FULL, 34) == (300, 100)
-    assert pc.state_counts(pc.FULL, 68) == (75, 25)
-    assert pc.state_counts(pc.FULL, 500) == (30, 10)
-    assert pc.state_counts(pc.QUICK, 500) == (3, 2)
+    assert state_counts(FULL, 34) == (300, 100)
+    assert state_counts(FULL, 68) == (75, 25)
+    assert state_counts(FULL, 500) == (30, 10)
+    assert state_counts(QUICK, 500) == (3, 2)
 
 
 # --------------------------------------------------------------------------- original URDF
@@ -193,7 +195,7 @@ def test_original_urdf_with_frozen_branch_compares_at_round_off(tmp_path):
     assert dict(orig.pin.locked) == {"finger": 0.3}
     assert orig.pin.model.nq == 4 and orig.pin.model.nv == 3      # continuous shoulder: cos, sin
     assert list(orig.pin.continuous) == [True, False, False]
-    states = pc.scenario_states(s, pc.QUICK)
+    states = scenario_states(s, QUICK)
     df = pc.compare_case(orig, states)
     bad = df[df["status"] != "pass"]
     assert bad.empty, bad[["quantity", "case", "rel_error", "tol_rel"]].to_string()
@@ -206,7 +208,7 @@ def test_original_urdf_locked_elsewhere_fails_mass_terms(tmp_path):
     the mass matrix and gravity must differ; the kinematics of the chain must not."""
     s = branch_arm_scenario(frozen={})
     case = pc.original_urdf_case(s)
-    df = pc.compare_case(case, pc.random_states(s.system, 3, np.random.default_rng(5), 1.0))
+    df = pc.compare_case(case, random_states(s.system, 3, np.random.default_rng(5), 1.0))
     failed = set(df.loc[df["status"] == "fail", "quantity"])
     assert {"M", "g"} <= failed
     assert not failed & {"pose position", "pose rotation", "frame position", "frame jacobian"}
@@ -221,8 +223,8 @@ def test_original_urdf_rejects_a_frozen_chain_joint():
 
 # --------------------------------------------------------------------------- perturbations
 def _states(scenario, count=3, seed=7):
-    return pc.random_states(scenario.system, count, np.random.default_rng(seed), scenario.t_end,
-                            scenario.flexible_coordinates, scenario.q0)
+    return random_states(scenario.system, count, np.random.default_rng(seed), scenario.t_end,
+                         scenario.flexible_coordinates, scenario.q0)
 
 
 def _failed(case, states):

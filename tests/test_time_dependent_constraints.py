@@ -157,14 +157,15 @@ def arm_scenario(arm, t, q, qd):
 def test_terms_agree_with_pinocchio(arm):
     """Phi, Phi_dot, A and kappa (and the frame terms they use) against Pinocchio's frame
     Jacobian and classical acceleration with the SymPy reference, at seeded states, with
-    the tolerances of crosscheck/pinocchio/check.py (round-off)."""
+    the Pinocchio check's tolerances (round-off)."""
     pytest.importorskip("pinocchio")
     from crosscheck.pinocchio import check as pc
+    from crosscheck.states import State
     wanted = {"Phi", "Phi_dot", "constraint jacobian A", "constraint kappa", "frame jacobian",
               "frame drift", "frame velocity"}
     for k, (t, q, qd, _) in enumerate(states(arm, 104, count=3)):
         case = pc.direct_case(arm_scenario(arm, t, q, qd))
-        rows = [r for r in pc.compare_state(case, pc.State(f"random {k}", t, q, qd))
+        rows = [r for r in pc.compare_state(case, State(f"random {k}", t, q, qd))
                 if r["quantity"] in wanted]
         assert {r["quantity"] for r in rows} == wanted
         bad = [(r["quantity"], r["abs_error"], r["tol_abs"], r["tol_rel"]) for r in rows
@@ -178,13 +179,14 @@ def test_model_file_with_rotating_ellipse_crosschecks(tmp_path):
     time on the same state (grad phi moves with t)."""
     pytest.importorskip("pinocchio")
     from crosscheck.pinocchio import check as pc
+    from crosscheck.states import State
     from gpme_io.modelfile import load_model_file
     s = load_model_file(DATA / "rotating_ellipse.toml")
     phi = s.system.solve(0.0, s.q0, s.q_dot0).phi
     np.testing.assert_allclose(phi, 0.0, atol=1e-10)
     case = pc.direct_case(s)
     for t in (0.0, 0.7):
-        rows = [r for r in pc.compare_state(case, pc.State(f"t={t}", t, s.q0, s.q_dot0))
+        rows = [r for r in pc.compare_state(case, State(f"t={t}", t, s.q0, s.q_dot0))
                 if r["quantity"] in {"Phi", "Phi_dot", "constraint jacobian A",
                                      "constraint kappa"}]
         assert len(rows) == 4 and all(r["status"] == "pass" for r in rows), rows

@@ -5,10 +5,11 @@ For each scenario (gpme_io.scenario.Scenario) the gpme model is written by
 gpme_io.urdf.write_urdf to out_dir/urdf/drake/<name>.urdf and read by Drake's own parser
 into a continuous MultibodyPlant (crosscheck.drake.model.from_urdf: springs as force elements and
 gravity from the side file, dampers as Drake's joint damping from <dynamics damping>).  At
-each state (crosscheck.pinocchio.check.scenario_states: seeded random states within the
-joint limits and states along a short run, the Pinocchio check's plan) every term of
+each state (crosscheck.states.scenario_states: seeded random states within the joint limits
+and states along a short run, the plan and states of the Pinocchio check) every term of
 gpme's ``ProgrammedMotion.solve(t, q, q_dot).terms`` is compared through
-crosscheck.compare.compare:
+crosscheck.compare.compare, with the tolerances shared with the Pinocchio check
+(crosscheck.tolerances) and Drake's own (here):
 
     quantity             gpme (M q_ddot = h + Q, Q = -(g + d + f) + t)   Drake
     pose position/rot.   chain_kinematics T of links, frames           Frame.CalcPoseInWorld
@@ -58,10 +59,10 @@ from gpme_core.kinematics import chain_kinematics, point_kinematics
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
-from ..pinocchio.check import FULL, QUICK, TOLERANCES as PIN_TOLERANCES, scenario_states, \
-    solve_tolerances
 from ..reports import tables as report
 from ..reports.rows import own_rows, write_rows
+from ..states import FULL, QUICK, scenario_states
+from ..tolerances import TOLERANCES as TERM_TOLERANCES, solve_tolerances
 from .model import DrakeSystem, drake_version, for_model
 
 ENGINE = "drake"
@@ -73,14 +74,15 @@ _SPLIT = ("; Drake gives the force elements' sum (gravity, springs, joint dampin
           "part is a difference of sums as large as the largest part: the relative "
           "tolerance is taken of scale = max(|spring|, |damper|, |tau_g|) (the row's scale)")
 # Each tolerance: abs (in the quantity's unit, a floor for exact zeros) and rel (normwise, to
-# the row's scale), with its reason.  Where the reason is the Pinocchio check's (the same
-# closed-form quantity in double precision), its table entry is reused.
+# the row's scale), with its reason.  Where the reason is the one the Pinocchio check gives
+# too (the same closed-form quantity in double precision), crosscheck.tolerances' entry is
+# used.
 TOLERANCES = {
-    "pose position": PIN_TOLERANCES["pose position"],
-    "pose rotation": PIN_TOLERANCES["pose rotation"],
-    "M": PIN_TOLERANCES["M"],
-    "bias term C(q,v) v": PIN_TOLERANCES["h"],
-    "gravity tau_g": PIN_TOLERANCES["g"],
+    "pose position": TERM_TOLERANCES["pose position"],
+    "pose rotation": TERM_TOLERANCES["pose rotation"],
+    "M": TERM_TOLERANCES["M"],
+    "bias term C(q,v) v": TERM_TOLERANCES["h"],
+    "gravity tau_g": TERM_TOLERANCES["g"],
     "spring forces": Tolerance(1e-12, 1e-12, "the same K (q - q_ref) from two sources (gpme "
                                "model vs Drake's RevoluteSpring/PrismaticSpring with the side "
                                "file's stiffness and reference): exact up to a few roundings"
@@ -89,10 +91,10 @@ TOLERANCES = {
                                "vs the <dynamics damping> Drake's parser read, applied as its "
                                "joint damping): exact up to a few roundings" + _SPLIT +
                                " (N, N m)"),
-    "frame position": PIN_TOLERANCES["frame position"],
-    "frame velocity": PIN_TOLERANCES["frame velocity"],
-    "frame jacobian": PIN_TOLERANCES["frame jacobian"],
-    "frame drift": PIN_TOLERANCES["frame drift"],
+    "frame position": TERM_TOLERANCES["frame position"],
+    "frame velocity": TERM_TOLERANCES["frame velocity"],
+    "frame jacobian": TERM_TOLERANCES["frame jacobian"],
+    "frame drift": TERM_TOLERANCES["frame drift"],
 }
 # quantities whose tolerance is set per state: free q_ddot by solve_tolerances (cond(M)),
 # the inverse dynamics residual by :func:`residual_tolerance` (n)
@@ -206,7 +208,7 @@ def drake_frame(ds: DrakeSystem, context, name: str) -> tuple:
 
 def compare_state(case: DrakeCase, state) -> list:
     """Tidy rows (list of dict) comparing every term of ``case`` at ``state`` (a
-    crosscheck.pinocchio.check.State: case name, t s, q (n,), q_dot (n,))."""
+    crosscheck.states.State: case name, t s, q (n,), q_dot (n,))."""
     system, ds, ctx = case.system, case.drake, case.context
     model = system.model
     t, q, qd = state.t, np.asarray(state.q, float), np.asarray(state.q_dot, float)
@@ -356,7 +358,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     "runs"; one row per quantity, scenario and state, or per run column).
 
     scenarios: gpme_io.scenario.Scenario objects; None: default_scenarios(quick).
-    quick    : the Pinocchio check's QUICK plan (3 random + 2 run states) and runs of at most
+    quick    : crosscheck.states.QUICK plan (3 random + 2 run states) and runs of at most
                0.2 s, instead of FULL (300 + 100 states) and runs of up to 2 s.
     sections : "terms" and/or "runs" (crosscheck.drake.runs.run_section).
     A scenario Drake cannot express (its URDF, joints) or whose states cannot be drawn gives

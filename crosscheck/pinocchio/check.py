@@ -11,8 +11,9 @@ For each scenario (gpme_io.scenario.Scenario) up to three model cases:
                     Pinocchio reads that URDF itself and locks every joint off the chain with
                     buildReducedModel at the frozen values (model.from_original_urdf).
 
-and for each state (seeded random states within the joint limits, states along a short run)
-every term is compared through crosscheck.compare.compare:
+and for each state (crosscheck.states: seeded random states within the joint limits, states
+along a short run) every term is compared through crosscheck.compare.compare, with the
+tolerances shared with the Drake check (crosscheck.tolerances) and Pinocchio's own (here):
 
     quantity            gpme                                 Pinocchio
     pose position/rot.  chain_kinematics T of links, frames  forwardKinematics + updateFramePlacements (oMf)
@@ -36,7 +37,6 @@ Hence g_pin = g, h = -(b - g_pin), tau = Q + g, and the multipliers agree with t
 """
 import logging
 import time
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Optional, Sequence
@@ -44,13 +44,10 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 import pandas as pd
 import pinocchio as pin
-from numpy.typing import NDArray
 
-from gpme_core.errors import ConstraintError, GpmeError, OutputWriteError, SimulationError
+from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.gpme import ProgrammedMotion
-from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics, point_kinematics
-from gpme_core.model import Model
 from gpme_io.file_names import named_path
 from gpme_io.urdf import read_urdf, write_urdf
 from gpme_io.urdf_reader import with_link_frames
@@ -58,61 +55,35 @@ from gpme_io.urdf_writer import link_own_frame
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
-from ..constraint_reference import (ReferenceJointProgramme, evaluate_reference,
-                                    reference_constraints)
+from ..constraint_reference import evaluate_reference, reference_constraints
 from ..reports import tables as report
 from ..reports.rows import own_rows, write_rows
-from ..sampling import state_ranges
+from ..states import FULL, QUICK, State, scenario_states
+from ..tolerances import TOLERANCES as TERM_TOLERANCES, solve_tolerances
 from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
 
 ENGINE = "pinocchio"
-SEED = 20240611
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 SECTIONS = ("terms", "runs")
 CASE_KINDS = ("direct", "URDF", "original URDF")
 log = logging.getLogger("gpme.crosscheck.pinocchio")
 
-_ROUND_OFF = ("round-off only: both engines evaluate the same closed-form quantity in double "
-              "precision through ~n products of 4x4 transforms or spatial recursions")
-_FORCE = ("round-off only: sums of products of inertia, transforms and velocities; normwise "
-          "relative to the largest entry")
-EPS = np.finfo(float).eps
-# eps cond_2(X) is the first-order relative forward error, in the 2-norm, of one
-# backward-stable solve with X (an estimate rather than a bound).  The rows measure
-# max|dx| / max|x| <= sqrt(n) ||dx||_2 / ||x||_2, hence the factor sqrt(n); two engines'
-# errors add (x2) and the estimate's constant gets a margin of 4: SOLVE_FACTOR = 8.
-SOLVE_FACTOR = 8.0
-_SOLVE = ("linear solve with M (aba in Pinocchio, Cholesky in gpme): forward error ~eps "
-          "cond(M) relative; an RFEM link makes M ill-conditioned (element torsion inertias "
-          "~1e-9 kg m^2 beside kilograms of robot: cond(M) up to ~3e7 for the crane with "
-          "n = 10); tol_rel = max(1e-12, 8 sqrt(n) eps cond_2(M)) (sqrt(n): 2-norm to max-entry "
-          "error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, n = {n}")
-_SOLVE_CONSTRAINED = (
-    "constrained solve: Pinocchio's forwardDynamics (Cholesky of M, then of A M^-1 A^T), "
-    "error ~eps cond(M); gpme's reduced GPME solves L = [N^T M; A] (N = [I; Gamma], Gamma = "
-    "-A_dc^-1 A_ic), error ~eps cond(L), and cond(L) exceeds cond(M) where Gamma is large; "
-    "tol_rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))) (sqrt(n): 2-norm to "
-    "max-entry error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, "
-    "cond(L) = {cond_l:.1e}, n = {n}")
-_MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = tol_rel "
-               "max|A^T lambda| ||A_dc^-T||_inf = {tol:.1e}")
-# Each tolerance: abs (in the quantity's unit, a floor for exact zeros such as h at rest)
-# and rel (normwise, to the largest entry of the Pinocchio value), with its reason.
+# Each tolerance: abs (in the quantity's unit, a floor for exact zeros) and rel (normwise, to
+# the largest entry of the Pinocchio value), with its reason.  The closed-form quantities the
+# Drake check compares too take crosscheck.tolerances' entry; the rest are Pinocchio's own.
 TOLERANCES = {
-    "pose position": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m)"),
-    "pose rotation": Tolerance(1e-14, 1e-12, _ROUND_OFF),
-    "M": Tolerance(1e-14, 1e-12, _FORCE + " (kg, kg m, kg m^2)"),
-    "g": Tolerance(1e-12, 1e-12, _FORCE + " (N, N m)"),
-    "h": Tolerance(1e-12, 1e-11, _FORCE + "; h cancels terms of size |M| |q_dot|^2, which "
-                   "can be 100x its result (crane: measured up to 5e-13)"),
+    "pose position": TERM_TOLERANCES["pose position"],
+    "pose rotation": TERM_TOLERANCES["pose rotation"],
+    "M": TERM_TOLERANCES["M"],
+    "g": TERM_TOLERANCES["g"],
+    "h": TERM_TOLERANCES["h"],
     "applied tau": Tolerance(1e-12, 1e-12, "same springs/dampers from two sources (gpme model "
                              "vs Pinocchio's URDF damping + side-file or model-file springs): "
                              "exact up to one rounding"),
-    "frame position": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m)"),
-    "frame velocity": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m/s)"),
-    "frame jacobian": Tolerance(1e-14, 1e-12, _ROUND_OFF + " (m or m/rad)"),
-    "frame drift": Tolerance(1e-12, 1e-11, _ROUND_OFF + "; the drift sums ~n^2 velocity "
-                             "products (m/s^2)"),
+    "frame position": TERM_TOLERANCES["frame position"],
+    "frame velocity": TERM_TOLERANCES["frame velocity"],
+    "frame jacobian": TERM_TOLERANCES["frame jacobian"],
+    "frame drift": TERM_TOLERANCES["frame drift"],
     "Phi": Tolerance(1e-14, 1e-12, "constraint value at the two frame positions; round-off"),
     "Phi_dot": Tolerance(1e-13, 1e-12, "constraint rate from the two frame velocities; "
                          "round-off. Phi_dot -> 0 on the constraint manifold, so along runs "
@@ -122,52 +93,12 @@ TOLERANCES = {
     "constraint kappa": Tolerance(1e-12, 1e-11, "Phi_ddot at a = drift (SymPy derivative of "
                                   "the task expression); inherits the drift tolerance"),
 }
-# quantities from a linear solve with M: tolerances set per state by solve_tolerances
+# quantities from a linear solve with M: tolerances set per state by
+# crosscheck.tolerances.solve_tolerances
 SOLVED = ("free q_ddot", "constrained q_ddot", "multipliers lambda", "reactions A^T lambda")
 CONSTRAINT_QUANTITIES = ("Phi", "Phi_dot", "constraint jacobian A", "constraint kappa",
                          "constrained q_ddot", "multipliers lambda", "reactions A^T lambda")
 FRAME_QUANTITIES = ("frame position", "frame velocity", "frame jacobian", "frame drift")
-
-
-def reduced_matrix(m, a, ic, dc):
-    """(n, n) L = [M[ic] + Gamma^T M[dc]; A], Gamma = -A_dc^-1 A_ic: the matrix of the
-    reduced GPME (paper eq. 7), built here from Pinocchio's M and the reference A only to
-    bound gpme's solve error by its condition number (not used for any compared value)."""
-    gamma = -np.linalg.solve(a[:, dc], a[:, ic])
-    return np.vstack([m[ic] + gamma.T @ m[dc], a])
-
-
-def solve_tolerances(m, reactions, a, ic, dc):
-    """Tolerances of the SOLVED quantities at one state.
-
-    m (n, n) mass matrix, reactions (n,) A^T lambda (N, N m), a (k, n) constraint
-    Jacobian, ic / dc index arrays of the independent / dependent coordinates.
-    free q_ddot: rel = max(1e-12, 8 sqrt(n) eps cond_2(M)).  Constrained q_ddot, reactions
-    and multipliers: rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))), L the reduced GPME
-    matrix (:func:`reduced_matrix`); the multipliers get abs = rel max|A^T lambda|
-    ||A_dc^-T||_inf as well, because lambda = A_dc^-T (A^T lambda)_dc can be small beside
-    the reactions.
-    """
-    n = m.shape[0]
-    factor = SOLVE_FACTOR * np.sqrt(n) * EPS
-    cond = float(np.linalg.cond(m))
-    rel = max(1e-12, factor * cond)
-    out = {"free q_ddot": Tolerance(1e-12, rel, _SOLVE.format(cond=cond, n=n) +
-                                    " (m/s^2, rad/s^2)")}
-    if a.shape[0] == 0:
-        return out
-    cond_l = float(np.linalg.cond(reduced_matrix(m, a, ic, dc)))
-    rel_c = max(1e-12, factor * max(cond, cond_l))
-    reason = _SOLVE_CONSTRAINED.format(cond=cond, cond_l=cond_l, n=n)
-    lam_abs = rel_c * float(np.max(np.abs(reactions))) * float(
-        np.linalg.norm(np.linalg.inv(a[:, dc]).T, np.inf))
-    out.update({
-        "constrained q_ddot": Tolerance(1e-12, rel_c, reason + " (m/s^2, rad/s^2)"),
-        "reactions A^T lambda": Tolerance(1e-12, rel_c, reason + " (N, N m)"),
-        "multipliers lambda": Tolerance(max(1e-12, lam_abs), rel_c, reason +
-                                        _MULTIPLIER.format(tol=lam_abs) +
-                                        " (N or N m per unit of the constraint)")})
-    return out
 
 
 def overrides(scenario) -> dict:
@@ -204,114 +135,6 @@ class ModelCase:
     pin: PinocchioSystem
     references: tuple
     overrides: Mapping[str, Tolerance] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class State:
-    """case name (str), t (s), q (n,), q_dot (n,) ordered as the model's coordinates."""
-
-    case: str
-    t: float
-    q: NDArray[np.float64]
-    q_dot: NDArray[np.float64]
-
-
-# --------------------------------------------------------------------------- states
-def random_states(system: ProgrammedMotion, count: int, rng: np.random.Generator,
-                  t_max: float, flexible: Sequence[str] = (), q0: Optional[NDArray] = None,
-                  max_draws: Optional[int] = None) -> list:
-    """``count`` seeded random states (crosscheck.sampling.state_ranges, t uniform in
-    [0, t_max] s)
-    where the GPME is solvable; a draw with a singular dependent block is replaced by
-    the next draw, at most ``max_draws`` (default 20 count + 20) draws in all."""
-    lo, hi, rate = state_ranges(system.model, flexible, q0)
-    max_draws = 20 * count + 20 if max_draws is None else max_draws
-    out, draws, last = [], 0, ""
-    while len(out) < count:
-        if draws >= max_draws:
-            raise ConstraintError(f"{system.model.name}: only {len(out)} of {count} random "
-                                  f"states are solvable after {draws} draws (last: {last}); "
-                                  "the constraints are singular over most of the sampling "
-                                  "range (state_ranges)")
-        draws += 1
-        t = float(rng.uniform(0.0, t_max))
-        q = rng.uniform(lo, hi)
-        q_dot = rng.uniform(-rate, rate)
-        try:
-            system.solve(t, q, q_dot)
-        except ConstraintError as exc:
-            last = str(exc)[:200]
-            continue
-        out.append(State(f"random {len(out):03d}", t, q, q_dot))
-    return out
-
-
-def run_states(system: ProgrammedMotion, count: int, t_end: float, q0: NDArray,
-               q_dot0: NDArray) -> list:
-    """``count`` states evenly spaced along a Radau run of ``system`` from (q0, q_dot0).
-
-    Radau with rtol 1e-4: only realistic states are needed here, not an accurate run,
-    and RFEM torsion modes (~1e6 rad/s) make explicit integrators crawl.
-    """
-    df = simulate(system, t_end, q0, q_dot0, method="Radau", output_dt=t_end / count,
-                  rtol=1e-4, atol=1e-6)
-    names = list(system.model.coordinate_names)
-    rows = np.linspace(0, len(df) - 1, count).round().astype(int)
-    return [State(f"run t={df['t'].iloc[r]:.4f}", float(df["t"].iloc[r]),
-                  df[names].iloc[r].to_numpy(float),
-                  df[[f"{n}_dot" for n in names]].iloc[r].to_numpy(float)) for r in rows]
-
-
-@dataclass(frozen=True)
-class RunPlan:
-    """How much to compare per model: random states, states along a run of t_run s.
-    Scaled down for large models by :func:`state_counts`."""
-
-    n_random: int
-    n_run: int
-    t_run: float
-
-
-FULL = RunPlan(n_random=300, n_run=100, t_run=1.0)
-QUICK = RunPlan(n_random=3, n_run=2, t_run=0.05)
-# The full plan's counts hold up to N_FULL coordinates (the crane with 10 RFEM segments,
-# n = 34, ~2 ms per state and case); above, the cost of one state grows ~n^2 (trace-form
-# M and h) and the counts shrink as (N_FULL / n)^2, never below MIN_RANDOM + MIN_RUN.
-N_FULL = 34
-MIN_RANDOM, MIN_RUN = 30, 10
-
-
-def state_counts(plan: RunPlan, n: int) -> tuple:
-    """(random states, run states) of ``plan`` for a model with n coordinates."""
-    if n <= N_FULL:
-        return plan.n_random, plan.n_run
-    f = (N_FULL / n) ** 2
-    return (max(min(plan.n_random, MIN_RANDOM), round(plan.n_random * f)),
-            max(min(plan.n_run, MIN_RUN), round(plan.n_run * f)))
-
-
-def scenario_seed(name: str) -> int:
-    """Seed of a scenario's random states: SEED and a CRC of its name, so that adding a
-    scenario changes no other's states."""
-    return zlib.crc32(name.encode("utf-8")) ^ SEED
-
-
-def scenario_states(scenario, plan: RunPlan) -> list:
-    """Random and run states of ``scenario`` under ``plan``."""
-    system = scenario.system
-    if system.dependent is None:        # the scenario's system is not changed
-        system = system.with_pivoted_dependent(0.0, scenario.q0, scenario.q_dot0)
-    n_random, n_run = state_counts(plan, system.model.n_coordinates)
-    rng = np.random.default_rng(scenario_seed(scenario.name))
-    states = random_states(system, n_random, rng, scenario.t_end, scenario.flexible_coordinates,
-                           scenario.q0)
-    t_run = min(plan.t_run, scenario.t_end)
-    try:
-        along = run_states(system, n_run, t_run, scenario.q0, scenario.q_dot0)
-    except (ConstraintError, SimulationError) as exc:
-        raise type(exc)(f"scenario {scenario.name!r}: the Radau run for the states along "
-                        f"the run ({t_run:g} s from q0) failed: {exc}") from exc
-    return states + along
 
 
 # --------------------------------------------------------------------------- cases
@@ -521,7 +344,8 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     crosscheck.compare.COLUMNS plus ``section``; one row per quantity, model case and state).
 
     scenarios: gpme_io.scenario.Scenario objects; None: default_scenarios(quick) (the crane).
-    quick    : QUICK plan (3 random + 2 run states per model) instead of FULL.
+    quick    : crosscheck.states.QUICK plan (3 random + 2 run states per model) instead of
+               FULL.
     sections : "terms" (this module) and/or "runs" (crosscheck.pinocchio.runs.run_section).
     """
     unknown = sorted(set(sections) - set(SECTIONS))
