@@ -31,6 +31,9 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+from threadpoolctl import threadpool_limits
 
 from . import fast, kernels
 from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
@@ -57,7 +60,6 @@ def single_threaded_blas():
     with OpenBLAS's two threads waiting on each other and 170 us on one thread
     (benchmarks.kernel_profile, OPENBLAS_NUM_THREADS=2 vs 1).  The compiled runs and the
     benchmark's evaluations run inside this block."""
-    from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api="blas"):
         yield
 
@@ -166,8 +168,6 @@ def pack(system):
 def _straight_line(name, args, exprs, n_out):
     """Source of an njit function ``name(*args, out)`` writing exprs into out[0..n_out)
     after common-subexpression elimination (math module calls)."""
-    import sympy as sp
-    from sympy.printing.pycode import PythonCodePrinter
     printer = PythonCodePrinter({"fully_qualified_modules": True, "standard": "python3"})
     replacements, reduced = sp.cse(list(exprs), symbols=sp.numbered_symbols("_cse"))
     lines = ["@_jit_user", f"def {name}({', '.join(str(a) for a in args)}, out):"]
@@ -180,7 +180,6 @@ def _straight_line(name, args, exprs, n_out):
 
 
 def _named_symbols(expr, names):
-    import sympy as sp
     by_name = {s.name: s for s in expr.free_symbols}
     return [by_name.get(nm, sp.Symbol(nm)) for nm in names]
 
@@ -198,7 +197,6 @@ def _dispatch(name, args, impls, n_out):
 def user_source(user_points, user_times):
     """Python source of the user-function section for these SymPy constraints and time
     functions (gpme_core.kernels' stubs replaced)."""
-    import sympy as sp
     parts, point_impls, time_impls = [], [], []
     for k, spec in enumerate(user_points):
         x, y, z, t = _named_symbols(spec.expr, ("x", "y", "z", "t"))

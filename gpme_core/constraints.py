@@ -16,6 +16,7 @@ from T_i and T_ij, see gpme_core.kinematics.point_kinematics):
 import math
 
 import numpy as np
+import sympy as sp
 
 from . import expression_checks as checks
 from .errors import ConstraintError, ModelError
@@ -116,7 +117,6 @@ class SympyPointConstraint(PointConstraint):
     """
 
     def __init__(self, expr, frame="E", name="Phi", symbols=None):
-        import sympy as sp
         x, y, z, t = symbols or sp.symbols("x y z t")
         label = f"constraint {name!r}"
         parsed, problems = checks.read_expression(

@@ -2,6 +2,8 @@
 
 Every error raised for user input names the offending value and what would be valid.
 """
+import shutil
+from pathlib import Path
 
 
 class GpmeError(Exception):
@@ -68,8 +70,6 @@ class OutputWriteError(GpmeError, OSError):
 def _space_left(path) -> str:
     """'; 12.3 kB free on /mount/dir' for the nearest existing folder of ``path`` (empty
     when it cannot be measured)."""
-    import shutil
-    from pathlib import Path
     folder = Path(path).absolute().parent
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent

@@ -28,11 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from . import fast
+from . import fast, kernels
 from .constraint_rank import dependence_problem
 from .constraints import bind_constraints, evaluate_constraints
 from .dynamics import dynamics_terms
 from .errors import ConstraintError, ModelError
+from .kinematics import chain_kinematics
 
 # A partition whose reciprocal condition number (:func:`partition_rcond`: A_dc against the
 # whole Jacobian) is below this is treated as singular: the dependent velocities would
@@ -212,7 +213,6 @@ class ProgrammedMotion:
     def constraints(self, t, q, q_dot, kin=None):
         """(Phi (m,), Phi_dot (m,), A (m, n), kappa (m,))."""
         if kin is None:
-            from .kinematics import chain_kinematics
             kin = chain_kinematics(self.model, q)
         return evaluate_constraints(self.model, self.bound, t, kin, np.asarray(q_dot, float))
 
@@ -403,7 +403,6 @@ def _reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
 def _compiled_reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
     """_reduced_solve through gpme_core.kernels.reduced_solve (no switching: switch_below
     0; singular at partition_rcond <= SINGULAR_RCOND, as the numpy path's caller)."""
-    from . import kernels
     n, k = m.shape[0], dc.shape[0]
     q_ddot, lam = np.zeros(n), np.zeros(k)
     scratch = np.empty(kernels.reduced_scratch_size(n, k))

@@ -26,7 +26,8 @@ from .errors import (ConstraintError, GpmeError, ModelError, SimulationError,
                      UnstableStepError)
 from .compiled import DIVERGENCE_LIMIT, for_system
 from .compiled_runs import COMPILED_METHODS, run_compiled
-from .gpme import SWITCH_RCOND, partition_rcond
+from .expression_checks import singular_sets
+from .gpme import SWITCH_RCOND, ProgrammedMotion, partition_rcond
 from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_METHODS,
                       METHODS)
 from .progress import Progress
@@ -242,7 +243,6 @@ def _raise_if_unstable(partition, dt, t_good, y_good, n, exc):
 def nonsmooth_expressions(system):
     """['constraint 'C': division: where t - 0.03 = 0', ...]: where the SymPy expressions of
     ``system`` (constraints, programmes, drives) are not smooth (poles, domain edges)."""
-    from .expression_checks import singular_sets
     found = []
     named = [(f"constraint {c.name!r}", c) for c in system.constraint_specs]
     named += [(f"drive on {d.joint!r}", d) for d in system.model.drives]
@@ -406,7 +406,6 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     they happened; with the solve_ivp methods "t" is the time of the evaluation that
     switched, which may belong to a step the method later rejected.
     """
-    from .gpme import ProgrammedMotion
     if not isinstance(system, ProgrammedMotion):
         raise ModelError(f"system must be a gpme_core.gpme.ProgrammedMotion (a model with its "
                          f"constraints; ProgrammedMotion(model) for none), got "

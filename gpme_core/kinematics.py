@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import fast
+
 _E4 = np.eye(4)
 
 
@@ -135,7 +137,6 @@ class PointKinematics:
 
 def point_kinematics(model, kin, q_dot, link, r_local):
     """Kinematics of the point r_local (3,) m (in the frame of ``link``) at kin, q_dot."""
-    from . import fast
     if fast.ENABLED:
         pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, np.asarray(q_dot, dtype=float),
                                         link, np.asarray(r_local, dtype=float))

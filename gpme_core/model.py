@@ -22,12 +22,12 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import transforms as tf
+from .dynamics import mass_matrix
 from .errors import ModelError
 from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
+from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE   # users import them from here
+from .rfem import discretise_beam
 
-REVOLUTE = "revolute"
-PRISMATIC = "prismatic"
-JOINT_KINDS = (REVOLUTE, PRISMATIC)
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
 # |axis| - 1 accepted for a joint axis (a unit vector written in 9 significant digits)
 AXIS_UNIT_TOL = 1e-9
@@ -121,21 +121,6 @@ class Drive:
 
     joint: str
     function: Callable[[float], float]
-
-
-@dataclass(frozen=True)
-class FlexibleLinkInfo:
-    """Record of a link discretised by the RFEM (for export and reports)."""
-
-    name: str
-    beam: object
-    n_segments: int
-    joint_indices: tuple
-    link_indices: tuple
-
-    def __post_init__(self):
-        object.__setattr__(self, "joint_indices", tuple(int(k) for k in self.joint_indices))
-        object.__setattr__(self, "link_indices", tuple(int(k) for k in self.link_indices))
 
 
 class Model:
@@ -341,7 +326,6 @@ def validate_model(model):
 
 
 def _mass_matrix_problems(model):
-    from .dynamics import mass_matrix  # local import: dynamics imports model
     q = model.spring_reference.copy()
     m = mass_matrix(model, q)
     eig, vec = np.linalg.eigh(m)
@@ -439,20 +423,21 @@ class ChainBuilder:
                 identity (the beam along +x of the link frame).  What is added next
                 attaches at the beam tip, B @ translation(L) at zero deflection.
         """
-        from .rfem import discretise_beam
         discretise_beam(self, name, beam, n_segments, frame=frame)
 
-    # used by rfem
-    def _pending_origin_transform(self):
-        """(4, 4) current link frame -> where the next joint, body or frame attaches."""
+    def pending_origin(self):
+        """(4, 4) current link frame -> where the next joint, body or frame attaches (a copy;
+        the identity except after a beam: its tip, gpme_core.rfem.discretise_beam)."""
         return self._pending_origin.copy()
 
-    def _set_pending_origin(self, t):
+    def set_pending_origin(self, t):
+        """Attach the next joint, body or frame at t (4, 4), given in the current link frame
+        (gpme_core.rfem.discretise_beam moves it to the beam tip)."""
         self._pending_origin = np.asarray(t, dtype=float)
 
     def record_flexible_link(self, info):
-        """Record a FlexibleLinkInfo (done by add_beam; public for model readers that
-        rebuild an RFEM link from a file)."""
+        """Record a gpme_core.rfem.FlexibleLinkInfo (done by add_beam; public for model
+        readers that rebuild an RFEM link from a file)."""
         self._flex.append(info)
 
     def build(self):

@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import transforms as tf
 from .errors import ModelError, SectionWarning
 from .inertia import RigidBodyInertia
-from .model import REVOLUTE, FlexibleLinkInfo
+from .joint_kinds import REVOLUTE
 
 # joint axis, coordinate prefix, which stiffness; order psi (z), theta (y), phi (x)
 SDE_ROTATIONS = (("psi", (0.0, 0.0, 1.0)), ("theta", (0.0, 1.0, 0.0)), ("phi", (1.0, 0.0, 0.0)))
@@ -464,6 +464,21 @@ def beam_frame_problems(label: str, frame) -> list:
     return out
 
 
+@dataclass(frozen=True)
+class FlexibleLinkInfo:
+    """Record of a link discretised by the RFEM (for export and reports)."""
+
+    name: str
+    beam: object
+    n_segments: int
+    joint_indices: tuple
+    link_indices: tuple
+
+    def __post_init__(self):
+        object.__setattr__(self, "joint_indices", tuple(int(k) for k in self.joint_indices))
+        object.__setattr__(self, "link_indices", tuple(int(k) for k in self.link_indices))
+
+
 def discretise_beam(builder, name, beam, n_segments, frame=None):
     """Add the RFEM discretisation of ``beam`` to ``builder`` on its current link.
 
@@ -488,10 +503,10 @@ def discretise_beam(builder, name, beam, n_segments, frame=None):
     if problems:
         raise ModelError(problems)
     n = int(n_segments)
-    pending = builder._pending_origin_transform()        # link frame -> attachment point
+    pending = builder.pending_origin()                   # link frame -> attachment point
     if n == 0:
         builder.add_body(beam.element_inertia(beam.length), origin=t_link_beam)
-        builder._set_pending_origin(pending @ t_link_beam @ tf.translation(beam.length))
+        builder.set_pending_origin(pending @ t_link_beam @ tf.translation(beam.length))
         builder.record_flexible_link(FlexibleLinkInfo(name, beam, 0, (), ()))
         return
     dl = beam.length / n
@@ -509,5 +524,5 @@ def discretise_beam(builder, name, beam, n_segments, frame=None):
             joints.append(idx)
             links.append(idx)
         builder.add_body(beam.element_inertia(dl if r < n else 0.5 * dl))
-    builder._set_pending_origin(tf.translation(0.5 * dl))
+    builder.set_pending_origin(tf.translation(0.5 * dl))
     builder.record_flexible_link(FlexibleLinkInfo(name, beam, n, tuple(joints), tuple(links)))

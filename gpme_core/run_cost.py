@@ -13,6 +13,8 @@ from typing import Optional
 
 import numpy as np
 
+from . import fast, kernels
+from .compiled import single_threaded_blas
 from .methods import DOP853, EXPLICIT_ADAPTIVE_METHODS, RADAU, RADAU_IIA, RK4, RK45
 from .progress import Compiling
 
@@ -111,10 +113,8 @@ def kernels_compiled(compiled=None):
     """Whether the numba kernels are compiled (or loaded from their cache) in this process;
     True when the compiled path is off.  compiled: a gpme_core.compiled.CompiledSystem whose
     fused evaluation counts too (None: only the Python path's kernels)."""
-    from . import fast
     if not fast.ENABLED:
         return True
-    from . import kernels
     done = (all(getattr(fast, name).signatures for name in ("chain_and_terms", "point"))
             and bool(kernels.reduced_solve.signatures))
     return done and (compiled is None or bool(compiled.module.evaluate.signatures))
@@ -139,7 +139,6 @@ def time_evaluation(system, q0, q_dot0, progress=None, compiled=None):
     # block, OpenBLAS's pools (numpy's and SciPy's) waited on each other after the Python
     # path's first solve: a 500-link chain timed 555 ms per evaluation instead of 3 ms,
     # and its run was estimated at 30.6 min for 8.8 s
-    from .compiled import single_threaded_blas
     with single_threaded_blas():
         return _timed(system, q0, q_dot0, progress, compiled)
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .dynamics import mass_matrix
 from .errors import ModelError
 from .gpme import SWITCH_RCOND
 
@@ -129,7 +130,6 @@ def _baumgarte_modes(system):
 def springs_jacobian(model, q):
     """(2n, 2n) 1/s: [[0, I], [-M^-1 K, -M^-1 D]] of the joint and RFEM springs and dampers
     and the mass matrix at q (gravity, velocity terms and constraints left out)."""
-    from .dynamics import mass_matrix
     n = model.n_coordinates
     m_inv = np.linalg.inv(mass_matrix(model, q))
     a = np.zeros((2 * n, 2 * n))

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
+import sympy as sp
+from scipy.linalg import solve_banded
 
 from . import expression_checks as checks
 from .errors import ConstraintError, ModelError
@@ -266,7 +268,6 @@ def _natural_spline(t, y):
         ab[0, 1:] = h[1:-1]
         ab[1] = 2.0 * (h[:-1] + h[1:])
         ab[2, :-1] = h[1:-1]
-        from scipy.linalg import solve_banded
         m[1:-1] = solve_banded((1, 1), ab, 6.0 * np.diff(slope))
     a = y[:-1]
     b = (y[1:] - y[:-1]) / h - h * (2.0 * m[:-1] + m[1:]) / 6.0
@@ -301,7 +302,6 @@ class SympyTimeFunction(TimeFunction):
     """
 
     def __init__(self, expr, t_symbol: Optional[object] = None, name: Optional[str] = None):
-        import sympy as sp
         t_sym = t_symbol if t_symbol is not None else sp.Symbol("t")
         label = f"time function {name!r}" if name is not None else "SympyTimeFunction"
         parsed, problems = checks.read_expression(expr, {"t": t_sym}, label,

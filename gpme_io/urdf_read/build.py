@@ -9,9 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gpme_core import transforms as tf
-from gpme_core.model import (REVOLUTE, STANDARD_GRAVITY, ChainBuilder, FlexibleLinkInfo, Model,
-                             validate_model)
-from gpme_core.rfem import BeamProperties
+from gpme_core.model import REVOLUTE, STANDARD_GRAVITY, ChainBuilder, Model, validate_model
+from gpme_core.rfem import BeamProperties, FlexibleLinkInfo
 
 from ..side_file import drive_function
 from .joint import _MOVING
