@@ -33,8 +33,10 @@ from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_ME
 from .progress import Progress
 from .run_cost import estimate_run, time_evaluation
 from .singular_approach import approach
+# rk4_stability_step, springs_jacobian and suggest_rk4_step are gpme_core.stability's;
+# callers (tests, crosscheck, benchmarks) import them from here too
 from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
-                        unstable_step_message)
+                        suggest_rk4_step, unstable_step_message)
 
 log = logging.getLogger("gpme.integrate")
 
@@ -50,19 +52,6 @@ SCIPY_PROGRESS_UNITS = 1000
 WALL_CHECK_EVERY = 200
 # a recorded history above this many bytes in memory is refused before the run
 MAX_HISTORY_BYTES = 4 * 2 ** 30
-
-
-def suggest_rk4_step(model, q, safety=0.5):
-    """s: a stable RK4 step for small oscillations about q (springs, dampers, inertia).
-
-    Eigenvalues of the linearised first-order system [[0, I], [-M^-1 K, -M^-1 D]] at q
-    (gravity stiffness and constraints neglected: they are slow here); returns ``safety``
-    times the smallest RK4 stability step over them.  With Kelvin-Voigt RFEM dampers the
-    limit can come from the overdamped high modes (real eigenvalues ~ -eta/E omega^2).
-    """
-    a = springs_jacobian(model, q)
-    steps = [rk4_stability_step(lam) for lam in np.linalg.eigvals(a)]
-    return safety * float(min(steps))
 
 
 class RunPartition:

@@ -139,6 +139,19 @@ def springs_jacobian(model, q):
     return a
 
 
+def suggest_rk4_step(model, q, safety=0.5):
+    """s: a stable RK4 step for small oscillations about q (springs, dampers, inertia).
+
+    Eigenvalues of the linearised first-order system [[0, I], [-M^-1 K, -M^-1 D]] at q
+    (gravity stiffness and constraints neglected: they are slow here); returns ``safety``
+    times the smallest RK4 stability step over them.  With Kelvin-Voigt RFEM dampers the
+    limit can come from the overdamped high modes (real eigenvalues ~ -eta/E omega^2).
+    """
+    a = springs_jacobian(model, q)
+    steps = [rk4_stability_step(lam) for lam in np.linalg.eigvals(a)]
+    return safety * float(min(steps))
+
+
 def _linearised_jacobian(system, t, q, q_dot):
     n = system.model.n_coordinates
     y = np.concatenate([q, q_dot])
