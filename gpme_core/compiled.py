@@ -27,15 +27,15 @@ import importlib.util
 import os
 import sys
 import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
-from threadpoolctl import threadpool_limits
 
 from . import fast, kernels
+# single_threaded_blas is gpme_core.blas_threads'; the benchmarks take it from here
+from .blas_threads import single_threaded_blas  # noqa: F401
 from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                           SympyPointConstraint)
 from .errors import OutputWriteError
@@ -49,19 +49,6 @@ DIVERGENCE_LIMIT = 1e6
 _BEGIN = "# --- user functions: begin ---"
 _END = "# --- user functions: end ---"
 
-
-@contextmanager
-def single_threaded_blas():
-    """BLAS and LAPACK on one thread inside the block (restored after it).
-
-    The kernels call LAPACK only for the Cholesky factor of N^T M N above
-    kernels.LAPACK_FROM coordinates, far too small to gain from threads: on this 2-core
-    machine with one other busy process, the n_rfe = 50 crane's reduced solve took 1112 us
-    with OpenBLAS's two threads waiting on each other and 170 us on one thread
-    (benchmarks.kernel_profile, OPENBLAS_NUM_THREADS=2 vs 1).  The compiled runs and the
-    benchmark's evaluations run inside this block."""
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield
 
 
 class NotCompilable(Exception):

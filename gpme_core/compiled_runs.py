@@ -9,7 +9,8 @@ the messages are the same as on the Python path.
 import numpy as np
 
 from . import kernels
-from .compiled import DIVERGENCE_LIMIT, single_threaded_blas
+from .blas_threads import single_threaded_blas
+from .compiled import DIVERGENCE_LIMIT
 from .errors import ConstraintError, SimulationError
 from .gpme import partition_rcond
 from .methods import RADAU_IIA, RK4

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from . import fast, kernels
+from . import fast
 from .constraint_rank import dependence_problem
 from .constraints import bind_constraints, evaluate_constraints
 from .dynamics import dynamics_terms
@@ -403,6 +403,7 @@ def _reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
 def _compiled_reduced_solve(m, rhs, a, constraint_rhs, ic, dc):
     """_reduced_solve through gpme_core.kernels.reduced_solve (no switching: switch_below
     0; singular at partition_rcond <= SINGULAR_RCOND, as the numpy path's caller)."""
+    from . import kernels    # numba's compiled kernels, ~20 ms to load: only when solving
     n, k = m.shape[0], dc.shape[0]
     q_ddot, lam = np.zeros(n), np.zeros(k)
     scratch = np.empty(kernels.reduced_scratch_size(n, k))

@@ -13,8 +13,8 @@ from typing import Optional
 
 import numpy as np
 
-from . import fast, kernels
-from .compiled import single_threaded_blas
+from . import fast
+from .blas_threads import single_threaded_blas
 from .methods import DOP853, EXPLICIT_ADAPTIVE_METHODS, RADAU, RADAU_IIA, RK4, RK45
 from .progress import Compiling
 
@@ -115,6 +115,7 @@ def kernels_compiled(compiled=None):
     fused evaluation counts too (None: only the Python path's kernels)."""
     if not fast.ENABLED:
         return True
+    from . import kernels    # numba's compiled kernels, ~20 ms to load: only when asked
     done = (all(getattr(fast, name).signatures for name in ("chain_and_terms", "point"))
             and bool(kernels.reduced_solve.signatures))
     return done and (compiled is None or bool(compiled.module.evaluate.signatures))
