@@ -1,19 +1,12 @@
 """The paper's two simulations (section 3): the crane with rigid links and flexible support,
 and with the flexible arm and flexible support, 10 s of programmed motion.  Their histories
 and the paper's figures are written by gpme_io.paper_outputs (examples return data)."""
-from .crane import CraneParameters, build_crane, crane_system, initial_state
+# the runs' settings (DEFAULT_N_RFE, T_END, QUICK_T_END, DEFAULT_DT) live in crane.py with
+# every other number of the example; they are read here too, as paper.T_END etc.
+from .crane import (DEFAULT_DT, DEFAULT_N_RFE, QUICK_T_END, T_END, CraneParameters, build_crane,
+                    crane_system, initial_state)
 from gpme_core.elastic_loads import elastic_peaks
 from gpme_core.integrate import simulate
-
-DEFAULT_N_RFE = 3
-# s, the paper's runs: 10 s of programmed motion (Figs. 2 and 3); a quick (CI) run takes
-# the first 2 s.  Defined here once: crane_scenario, `gpme simulate`, `gpme verify`.
-T_END = 10.0
-QUICK_T_END = 2.0
-# RK4 steps: the rigid crane's fastest motion is the 5 Hz support and the 20 1/s
-# Baumgarte rate; the flexible arm's RFEM torsion modes (about 5 kHz at n = 3) need
-# dt below 8e-5 s (gpme_core.integrate.suggest_rk4_step); 5e-5 s keeps a 40 % margin.
-DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 
 def run_case(case, n_rfe=DEFAULT_N_RFE, t_end=T_END, dt=None, method="RK4", on_manifold=False,
