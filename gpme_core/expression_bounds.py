@@ -21,7 +21,7 @@ passes and why, when
 - or the product-rule estimate of its second derivatives (:func:`derivative_nodes`) is
   above :data:`MAX_DERIVATIVE_NODES`.
 
-The model-file reader (gpme_io.modelfile.expressions) applies :func:`power_problem`,
+The model-file reader (gpme_io.expressions) applies :func:`power_problem`,
 :func:`constant_problem` and :func:`function_problem` while it converts the text's syntax
 tree; the Python API (gpme_core.expression_checks.read_expression) reads a string without
 evaluating it and rebuilds it node by node with :func:`evaluate_bounded`.  Both check

@@ -26,7 +26,7 @@ name which values are not finite (:data:`MODULES`).
 Functions smooth only on part of the line (sqrt, log, division, asin, ...) are accepted;
 :func:`singular_sets` names where they are not smooth or leave their domain, for the
 message given when a value is not finite.  The table of refused functions and its reasons
-is the one gpme_io.modelfile.expressions uses for model files (:data:`NON_SMOOTH`).
+is the one gpme_io.expressions uses for model files (:data:`NON_SMOOTH`).
 """
 import builtins
 import dis

@@ -2,6 +2,7 @@
 os.replace, so an interrupted run never leaves a half-written file where a good one was.
 Text, bytes, CSV tables and matplotlib figures (as compact PNGs, gpme_io.png); the engine
 (gpme_core) writes no files, it returns data (issue 25)."""
+import gzip
 import os
 import tempfile
 from pathlib import Path
@@ -68,7 +69,6 @@ def atomic_write_csv(df, path, significant_digits=None):
             return repr(float(spec % v))
     text = df.to_csv(index=False, lineterminator="\n", float_format=float_format)
     if str(path).endswith(".gz"):
-        import gzip
         atomic_write_bytes(path, gzip.compress(text.encode("utf-8"), compresslevel=9,
                                                mtime=0))
     else:

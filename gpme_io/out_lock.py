@@ -13,6 +13,7 @@ import contextlib
 import json
 import os
 import socket
+import tempfile
 import time
 from pathlib import Path
 
@@ -129,7 +130,6 @@ def output_file_problem(path, flag, example):
 def _unwritable(directory, text, flag, what):
     """Why ``directory`` (or the nearest existing folder above it) cannot take a new file:
     a file on the way, or no write permission (None when it can)."""
-    import tempfile
     probe = directory
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent

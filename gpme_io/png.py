@@ -4,6 +4,7 @@ PNG_MAX_ERROR).  Writing them is gpme_io.atomic.atomic_save_figure."""
 import io
 
 import numpy as np
+from PIL import Image
 
 # A figure's PNG is re-encoded with an adaptive palette of PNG_COLOURS colours when no
 # pixel channel moves by more than PNG_MAX_ERROR (of 255): line plots are a few exact
@@ -19,7 +20,6 @@ def compact_png(data: bytes) -> bytes:
     adaptive palette (PNG_COLOURS, no dithering) when it changes no channel of any pixel
     by more than PNG_MAX_ERROR, else losslessly; always with zlib's best compression.
     Returns ``data`` itself when that is smaller."""
-    from PIL import Image
     with Image.open(io.BytesIO(data)) as image:
         image.load()
         dpi = image.info.get("dpi")

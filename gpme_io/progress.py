@@ -5,6 +5,8 @@ first call's numba compilation is announced on both.  `gpme simulate` and `gpme 
 pass it to the runs (gpme_io.runs.simulate_scenario, gpme_examples.paper.run_case)."""
 import sys
 
+from tqdm import tqdm
+
 from gpme_core.progress import Compiling, Progress
 
 # s between two progress lines when stderr is not a terminal
@@ -58,7 +60,6 @@ class _RunProgress:
         self.bar, self.lines, self.next_tenth = None, True, 1
         self.done, self.last_line_s = 0, 0.0
         if sys.stderr.isatty():
-            from tqdm import tqdm
             self.bar = tqdm(total=self.total, unit="step", desc=self.label, leave=False,
                             mininterval=1.0)
             self.lines = False

@@ -21,6 +21,8 @@ from numpy.typing import NDArray
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.methods import METHODS
 from gpme_core.model import Model
+from gpme_core.stability import suggest_rk4_step
+from gpme_examples import crane
 
 INTEGRATORS = METHODS            # gpme_core.methods
 
@@ -138,21 +140,19 @@ def crane_scenario(n_rfe=0, on_constraints=False, static_arm=False):
     """The paper's crane as a Scenario (rigid for n_rfe = 0, else n_rfe RFEM segments),
     with the paper's off-manifold start unless ``on_constraints``.  The model files
     models/crane_rigid.toml and models/crane_flexible.toml describe the same."""
-    from gpme_examples import crane, paper
     params = crane.CraneParameters()
     system = crane.crane_system(n_rfe, params)
     q0, qd0 = crane.initial_state(system.model, params, static_arm=static_arm and n_rfe > 0)
     if on_constraints:
         q0, qd0 = system.consistent_state(0.0, q0, qd0)
     case = "rigid" if n_rfe == 0 else "flexible"
-    dt = paper.DEFAULT_DT[case]
-    if n_rfe > paper.DEFAULT_N_RFE:
+    dt = crane.DEFAULT_DT[case]
+    if n_rfe > crane.DEFAULT_N_RFE:
         # the paper's step is set for n_rfe = 3; finer arms have stiffer torsion modes
-        from gpme_core.integrate import suggest_rk4_step
         dt = min(dt, suggest_rk4_step(system.model, q0))
     return Scenario(name=system.model.name, model=system.model,
                     constraints=tuple(crane.crane_constraints(params)), system=system,
-                    q0=q0, q_dot0=qd0, t_end=paper.T_END, quick_t_end=paper.QUICK_T_END,
+                    q0=q0, q_dot0=qd0, t_end=crane.T_END, quick_t_end=crane.QUICK_T_END,
                     integrator="RK4",
                     dt=dt, output_dt=1e-3, on_constraints=on_constraints,
                     yield_strengths={f.name: params.arm_yield_strength

@@ -29,6 +29,7 @@ from gpme_core.errors import ModelError, ModelFileError, SectionWarning
 from gpme_core.model import Model
 from gpme_core.rfem import MAX_SEGMENTS, BeamProperties
 
+from .expressions import parse_expression
 from .input_files import SIDE_FILE_LIMIT, InputFileError, read_input_file
 
 SIDE_SUFFIX = ".gpme.json"
@@ -372,7 +373,6 @@ def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
         bad.append(f"{where}: {'; '.join(parts)}; {function} takes {takes}")
         return
     if function == EXPRESSION_DRIVE:
-        from gpme_io.modelfile.expressions import parse_expression
         _, problems = parse_expression(params["expr"], {"t": "s"})
         bad += [f"{where}: expr {p}" for p in problems]
         if problems:
@@ -407,10 +407,9 @@ def drive_record(drive) -> Optional[dict]:
 
 def drive_function(rec: dict):
     """The time function of a validated side-file drive record (expressions parsed by
-    gpme_io.modelfile.expressions, never evaluated as Python; ModelError for a record
+    gpme_io.expressions, never evaluated as Python; ModelError for a record
     that :func:`check_side_file` would refuse)."""
     if rec["function"] == EXPRESSION_DRIVE:
-        from gpme_io.modelfile.expressions import parse_expression
         expr, problems = parse_expression(rec["parameters"]["expr"], {"t": "s"})
         if problems:
             raise ModelError([f"expr {p}" for p in problems])

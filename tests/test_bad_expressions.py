@@ -26,7 +26,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.time_functions import Sine, SympyTimeFunction, TimeFunction
-from gpme_io.modelfile import expressions as file_expressions
+from gpme_io import expressions as file_expressions
 from gpme_io.modelfile import load_model_file
 
 # a warning from numpy (divide by zero, invalid value) is a failure here

@@ -41,7 +41,7 @@ from gpme_core.integrate import simulate
 from gpme_core.model import REVOLUTE, ChainBuilder
 from gpme_core.smoothness import KINK_TOL, check_run, kink_measures
 from gpme_core.time_functions import SympyTimeFunction
-from gpme_io.modelfile import expressions as file_expressions
+from gpme_io import expressions as file_expressions
 from gpme_io.modelfile import load_model_file
 from gpme_io.urdf_reader import read_urdf
 

@@ -9,8 +9,9 @@ line each: ``<file>: <key path>: <what is wrong, the value, what would be valid>
 An initial state that cannot be placed on the constraints raises
 :class:`gpme_core.errors.ConstraintError` with the constraint values.
 
-Modules: schema (the parsed file's dataclasses), expressions (safe SymPy reading of
-the file's formulas), load (TOML -> schema, with every check), build (schema -> Scenario).
+Modules: schema (the parsed file's dataclasses), load (TOML -> schema, with every check),
+build (schema -> Scenario); the file's formulas are read by gpme_io.expressions (safe
+SymPy reading, shared with the URDF's side file).
 """
 from pathlib import Path
 

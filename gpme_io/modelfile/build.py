@@ -23,12 +23,16 @@ from gpme_core.errors import ConstraintError, ModelError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import Drive, Frame, Model, validate_model
+from gpme_core.rfem import BeamSection
 from gpme_core.stability import STEP_SAFETY, rk4_limit
 from gpme_core.statics import static_equilibrium
 from gpme_core.time_functions import SympyTimeFunction, Tabulated
+from gpme_examples.crane import CraneParameters, build_crane
+from gpme_io import expressions as ex
 from gpme_io.scenario import Scenario
+from gpme_io.side_file import side_file_path
+from gpme_io.urdf_reader import FlexibleLink, load_urdf
 
-from . import expressions as ex
 from .schema import (CoordinateConstraintSpec, CraneSource, EllipseConstraintSpec,
                      ExpressionConstraintSpec, ModelFile, UrdfSource)
 
@@ -63,13 +67,11 @@ def build_source(spec: ModelFile) -> SourceModel:
 
 def _crane_parameters(spec: ModelFile):
     """CraneParameters of a builtin crane file: its [model.crane] overrides and gravity."""
-    from gpme_examples.crane import CraneParameters
     return CraneParameters(**{**dict(spec.model.source.overrides),
                               "gravity": tuple(spec.model.gravity)})
 
 
 def _crane_model(spec: ModelFile) -> SourceModel:
-    from gpme_examples.crane import build_crane
     src = spec.model.source
     params = _crane_parameters(spec)
     try:
@@ -80,9 +82,6 @@ def _crane_model(spec: ModelFile) -> SourceModel:
 
 
 def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
-    from gpme_core.rfem import BeamSection
-    from gpme_io.side_file import side_file_path
-    from gpme_io.urdf_reader import FlexibleLink, load_urdf
     shapes = {"circle": BeamSection.solid_circle, "tube": BeamSection.tube,
               "rectangle": BeamSection.rectangle, "hollow_rectangle": BeamSection.hollow_rectangle}
     problems = []

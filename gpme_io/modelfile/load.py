@@ -20,13 +20,13 @@ import numpy as np
 from gpme_core import time_functions as tfn
 from gpme_core.errors import ConstraintError, ModelError
 from gpme_core.methods import FIXED_STEP_METHODS
-from gpme_examples.crane import CraneParameters
+from gpme_examples.crane import CraneParameters, build_crane
 from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, URDF_LIMIT,
                                  InputFileError, check_input_file, read_input_file)
 from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
 from gpme_io.xml_text import xml_char_problem
 
-from . import expressions as ex
+from gpme_io import expressions as ex
 from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, POINT_SYMBOLS, SECTION_SHAPES,
                      TIME_SYMBOLS, ChainSection, CoordinateConstraintSpec, CraneSource,
                      DriveSpec, EllipseConstraintSpec, ExpressionConstraintSpec, FlexibleSpec,
@@ -474,7 +474,6 @@ def _crane_trial_build(c: _Checker, valid: dict, n_rfe: int) -> bool:
     """Build the crane from the keys that passed their own checks (defaults for the rest),
     so that a combination no single key shows (an arm wall as thick as the arm's radius) is
     listed together with the keys' own problems, not after they are fixed."""
-    from gpme_examples.crane import build_crane
     try:
         build_crane(max(n_rfe, 0), CraneParameters(**valid))
     except ModelError as exc:

@@ -1,5 +1,7 @@
 """Expressions written in a model file (constraints phi(x, y, z, t), programmes q(t),
-drives f(t)), read into SymPy without ever evaluating the user's text as Python.
+drives f(t)) or in a URDF's side file (drives f(t)), read into SymPy without ever
+evaluating the user's text as Python.  Its own module, not gpme_io.modelfile's: the side
+file (gpme_io.side_file) reads them too, and gpme_io.modelfile builds on the side file.
 
 The text is parsed by Python's ``ast`` module (syntax only) and the tree is converted node
 by node into SymPy: numbers, the allowed symbols, ``pi``, ``E``, ``+ - * / **`` and the
