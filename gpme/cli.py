@@ -7,21 +7,32 @@ Exit status: 0 success, 1 a check failed, 2 a usage or input error (message on s
 one line naming the file and the space left), 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP
 (gpme.signals: at every moment, compilation included).
 """
+# Imports inside functions: a command's own modules are imported by the function that runs
+# it (crosscheck's checks and engines, the paper's runs, the run service and its writers,
+# progress bars, `gpme verify`, `gpme sweep`), so that the parser and the other commands do
+# not load them (pandas, Pinocchio, MuJoCo, Drake, Exudyn, Dask, matplotlib).  Not in the
+# docstring above, which is `gpme --help`'s text.
 import argparse
+import os
+import signal
 import sys
 import time
 from functools import partial
+from importlib import import_module
 from pathlib import Path
 
 import numpy as np
 
 from gpme import signals
 from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Terminated)
-from gpme_core.errors import OutputWriteError
+from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.methods import FIXED_STEP_METHODS, METHODS
-from gpme_io.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S
+from gpme_core.rfem import MAX_SEGMENTS
+from gpme_io.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S, run_budget, wall_limit
 from gpme_io.modelfile import load_model_files
-from gpme_io.out_lock import output_dir_problem
+from gpme_io.out_lock import exclusive_output, output_dir_problem
+from gpme_io.scenario import crane_scenario
+from gpme_study.arguments import add_arguments as add_sweep_arguments
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EXIT_WRITE = 74         # EX_IOERR: an output could not be written (gpme_core.errors)
@@ -102,11 +113,9 @@ def checks_summary(rows):
 def _simulate_paper(args):
     """The paper's two crane runs with the paper's figures (no --model), each judged by the
     same checks as a model file's run (crosscheck.run_checks)."""
-    from gpme_io.budget import run_budget, wall_limit
     from gpme_examples import paper
     from gpme_io.paper_outputs import write_outputs
     from gpme_io.progress import progress_callback
-    from gpme_io.scenario import crane_scenario
     cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
     t_end = args.t_end or (paper.QUICK_T_END if args.quick else paper.T_END)
     n_rfe = paper.DEFAULT_N_RFE if args.n_rfe is None else args.n_rfe
@@ -141,7 +150,6 @@ def _simulate_paper(args):
 
 
 def _simulate_models(args):
-    from gpme_io.budget import run_budget, wall_limit
     from gpme_io.runs import simulate_scenario, write_run_outputs
     paths, rows = {}, []
     for scenario in load_model_files(args.model):
@@ -174,7 +182,6 @@ def _simulate_models(args):
 def simulate_problems(args) -> list:
     """Every problem of `gpme simulate`'s options, found from the values alone (no model is
     built): one message lists them all."""
-    from gpme_core.rfem import MAX_SEGMENTS
     problems = [p for p in (output_dir_problem(args.out),) if p]
     finite = float("inf")
     dt_ok = args.dt is None or 0 < args.dt < finite
@@ -201,7 +208,6 @@ def simulate_problems(args) -> list:
 
 
 def _simulate(args):
-    from gpme_core.errors import GpmeError
     problems = simulate_problems(args)
     if problems:
         return _error("; ".join(problems) if len(problems) == 1
@@ -209,7 +215,6 @@ def _simulate(args):
     if args.dt is not None and args.method not in (None,) + FIXED_STEP_METHODS:
         print(f"note: --dt {args.dt:g} s is the largest step of --method {args.method} "
               "(its steps follow its error control)", flush=True)
-    from gpme_io.out_lock import exclusive_output
     try:
         with exclusive_output(args.out):
             paths, rows = _simulate_models(args) if args.model else _simulate_paper(args)
@@ -224,12 +229,10 @@ def _simulate(args):
 
 
 def _crosscheck(args):
-    from gpme_core.errors import GpmeError
     if args.out is not None and output_dir_problem(args.out):
         return _error(output_dir_problem(args.out))
     from crosscheck.engines import missing_message
     from crosscheck.verify import default_scenarios, estimate_runs
-    from gpme_io.out_lock import exclusive_output
     if missing_message(args.engine):
         return _error(missing_message(args.engine))
     try:
@@ -243,7 +246,6 @@ def _crosscheck(args):
         raise                        # exit 74, gpme.cli.main
     except GpmeError as exc:
         return _error(exc)
-    from importlib import import_module
     check = import_module(f"crosscheck.{args.engine}.check")
     out = Path(args.out) if args.out else Path("reports") / time.strftime(f"{args.engine}-%Y%m%d-%H%M%S")
     try:
@@ -364,7 +366,6 @@ def build_parser():
                           "(default: the run --out/latest points at before this run)")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
-    from gpme_study.command import add_arguments as add_sweep_arguments
     sw = sub.add_parser("sweep", help="parameter sweep on a Dask cluster: table, heat maps, "
                                       "safe region (docs/sweep.md)")
     add_sweep_arguments(sw)
@@ -390,7 +391,6 @@ def main(argv=None, ignore_late_signals=False):
             signals.ignore_late_signals()
         return code
     except Terminated as exc:
-        import signal
         print(f"terminated ({signal.Signals(exc.signum).name}); finished files kept, "
               "partial output removed", file=sys.stderr)
         return signals.exit_status(exc)
@@ -402,7 +402,6 @@ def main(argv=None, ignore_late_signals=False):
               "report is not published and 'latest' is unchanged)", file=sys.stderr)
         return EXIT_WRITE
     except BrokenPipeError:          # output piped into a reader that stopped (| head)
-        import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
     except Exception as exc:
@@ -410,7 +409,6 @@ def main(argv=None, ignore_late_signals=False):
             raise
         # an error after a signal is the signal's doing (e.g. numba's compiler left
         # without its object code): the command ends as interrupted
-        import signal
         first = signals.pending()[0]
         print(f"terminated ({signal.Signals(first).name}, then {type(exc).__name__}); "
               "finished files kept, partial output removed", file=sys.stderr)

@@ -68,7 +68,8 @@ def main(args, problems=()):
         try:
             scenarios = load_model_files(args.model)
             if getattr(args, "only", None) in (None, "mujoco"):
-                from crosscheck.mujoco.names import scenario_name_problems   # MuJoCo
+                # loads MuJoCo, only when its step runs
+                from crosscheck.mujoco.names import scenario_name_problems
                 scenario_name_problems(scenarios)
         except GpmeError as exc:
             problems.append(str(exc))

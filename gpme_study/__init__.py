@@ -10,14 +10,16 @@ Modules, one job each:
   plots    heat maps over two parameters with the infeasible and the safe region marked
   cost     the wall time, output and memory of a sweep, estimated before it starts
            (measured warm-up runs), and the limits it is refused above without --force
-  command  the `gpme sweep` arguments, the checks of every input, then the estimate, the
-           run, the table and the plots
+  arguments the `gpme sweep` options (imports nothing: the `gpme` parser is built for
+           every command)
+  command  the checks of every input, then the estimate, the run, the table and the plots
+           (imported by `gpme sweep` only)
 With a model file (`gpme sweep --model FILE`) instead of the built-in crane:
   model_paths    the sweepable numbers of a model file, named by dotted paths
   model_spec     the sweep's run settings and validation for a model file
   model_point    one point: the document with the point's values -> Scenario -> one row
   model_metrics  the generic metrics (|Phi|, lambda, drive, reaction, q_dot, RFEM, limits,
                  sigma_min of the constraint Jacobian) and their units
-docs/sweep.md describes the metrics and their units.  Submodules are imported on use, so
-`import gpme_study.command` (done by the command-line parser) stays light.
+docs/sweep.md describes the metrics and their units.  Imported when needed only: Dask (a
+sweep on a cluster, runner) and matplotlib (the heat maps, plots).
 """

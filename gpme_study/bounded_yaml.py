@@ -9,6 +9,8 @@ to a node that contains it: a recursive document).
 """
 from typing import Any
 
+import yaml
+
 # units of expanded size: 1 per node plus the characters of each scalar.  A document
 # without aliases costs at most about as many units as its text has characters (each node
 # takes at least one character of text), so twice the sweep-file limit
@@ -21,7 +23,6 @@ class YamlSizeError(ValueError):
 
 
 def _children(node) -> list:
-    import yaml
     if isinstance(node, yaml.SequenceNode):
         return list(node.value)
     if isinstance(node, yaml.MappingNode):
@@ -30,7 +31,6 @@ def _children(node) -> list:
 
 
 def _own_size(node) -> int:
-    import yaml
     return 1 + (len(node.value) if isinstance(node, yaml.ScalarNode) else 0)
 
 
@@ -73,7 +73,6 @@ def load_yaml(text: str, limit: int = MAX_EXPANDED) -> Any:
     """The value of the YAML document ``text`` (safe tags only, as yaml.safe_load), after
     :func:`expanded_size` has bounded it; None for an empty document.  Raises
     YamlSizeError, or yaml.YAMLError for malformed text."""
-    import yaml
     loader = yaml.SafeLoader(text)
     try:
         node = loader.get_single_node()

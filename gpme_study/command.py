@@ -1,15 +1,26 @@
-"""`gpme sweep`: its arguments and their translation into a sweep spec (the command line
-overrides what a --config file says), then the run, the table and the plots.  Without
---model (and without ``model`` in the --config file) the built-in crane is swept; with it,
-the given model file (parameters are paths into it, gpme_study.model_paths).
+"""`gpme sweep`: its options (gpme_study.arguments) translated into a sweep spec (the
+command line overrides what a --config file says), then the run, the table and the
+plots.  Without --model (and without ``model`` in the --config file) the built-in crane is
+swept; with it, the given model file (parameters are paths into it, gpme_study.model_paths).
 
-Imports only argparse at module level, so building the `gpme` parser stays fast.
+Loaded by `gpme sweep` only (the parser takes the options from gpme_study.arguments).
 """
+import json
 import os
 import re
 import sys
+from pathlib import Path
 
 from gpme_core.echo import shown
+from gpme_io.atomic import atomic_write_text
+from gpme_io.out_lock import (OutputBusyError, busy_problem, exclusive_output,
+                              output_dir_problem)
+
+from .cost import estimate
+from .model_metrics import heat_map_metrics
+from .plots import write_plots
+from .runner import connect, pending_points, run_sweep
+from .spec import SweepSpecError, read_spec_file, spec_from_dict
 
 RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
              "output_dt": "output_dt", "dt": "dt", "min_frequency": "min_frequency_hz",
@@ -18,63 +29,6 @@ RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
 OTHER_FLAGS = {"plot_x": "plot.x", "plot_y": "plot.y"}
 # most local worker processes per core (more only trade memory for nothing)
 MAX_WORKERS_PER_CORE = 4
-
-
-def add_arguments(parser):
-    """The `gpme sweep` options on an argparse (sub)parser."""
-    parser.add_argument("--config", metavar="FILE",
-                        help="TOML or YAML sweep file (docs/sweep.md); options below override it")
-    parser.add_argument("--model", default=None, metavar="FILE",
-                        help="sweep this model file (docs/models.md) instead of the built-in "
-                             "crane; --param PATH=VALUES with dotted paths into it, e.g. "
-                             "joint.shoulder.stiffness=10:40:4")
-    parser.add_argument("--mode", choices=("grid", "list", "lhs"), default=None,
-                        help="grid (default), list (with --point) or lhs (Latin hypercube)")
-    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUES",
-                        help="grid: A=0.2,0.3,0.4 or A=0.2:0.6:5 (start:stop:num); "
-                             "lhs: A=0.2:0.6 (low:high); repeat per parameter")
-    parser.add_argument("--point", action="append", nargs="+", default=[],
-                        metavar="NAME=VALUE", help="one point of a list sweep, e.g. "
-                                                   "--point A=0.3 T=2; repeat per point")
-    parser.add_argument("--samples", type=int, default=None, help="lhs: number of points")
-    parser.add_argument("--seed", type=int, default=None, help="lhs: seed (default 0)")
-    parser.add_argument("--t-end", type=float, default=None, help="s, each run (default 6)")
-    parser.add_argument("--n-rfe", type=int, default=None,
-                        help="RFEM segments when n_rfe is not swept (default 1; 0 = rigid)")
-    parser.add_argument("--transient", type=float, default=None,
-                        help="s, start of the |Phi| and spectrum window (default 1)")
-    parser.add_argument("--output-dt", type=float, default=None,
-                        help="s, recorded row spacing (default 2e-3)")
-    parser.add_argument("--dt", type=float, default=None,
-                        help="s, RK4 step (default: per point from suggest_rk4_step)")
-    parser.add_argument("--min-frequency", type=float, default=None,
-                        help="Hz, lower edge of the vibration band (default 2)")
-    parser.add_argument("--phi-tolerance", type=float, default=None,
-                        help="largest |Phi| after the transient counted as met (default 1e-3)")
-    parser.add_argument("--on-constraints", action="store_true", default=None,
-                        help="with --model: start every point on its constraints "
-                             "([initial] on_constraints = true)")
-    parser.add_argument("--limit", action="append", default=[], metavar="METRIC=MAX",
-                        help="safe-region bound, e.g. vib_peak_m=1e-4 drive_psi3_peak_Nm=6")
-    parser.add_argument("--plot-x", default=None, help="heat-map x parameter")
-    parser.add_argument("--plot-y", default=None, help="heat-map y parameter")
-    parser.add_argument("--out", default="reports/sweep",
-                        help="output directory; a rerun with the same --out resumes")
-    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                        help="existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
-                             "(default: a local cluster)")
-    parser.add_argument("--workers", type=int, default=None,
-                        help="local cluster worker processes (default: one per core)")
-    parser.add_argument("--in-process", action="store_true",
-                        help="run the points one after another in this process, without Dask "
-                             "(tiny sweeps, debugging)")
-    parser.add_argument("--retry-errors", action="store_true",
-                        help="recompute stored points whose status is 'error'")
-    parser.add_argument("--force", action="store_true",
-                        help="run even when the estimate is above the limits (2 h wall "
-                             "time, 2 GB written, 2 GB of history per run in memory)")
-    parser.add_argument("--quiet", action="store_true", help="no progress lines")
-    return parser
 
 
 def _pairs(items, flag, problems):
@@ -92,9 +46,6 @@ def spec_dict(args, problems):
     """The raw sweep dict of ``args``: the --config file's, overridden by the options;
     problems with the options themselves are appended to ``problems``.  Returns None
     (with the problem appended) when the --config file cannot be read."""
-    from pathlib import Path
-
-    from .spec import SweepSpecError, read_spec_file
     try:
         data = read_spec_file(args.config) if args.config else {}
     except SweepSpecError as exc:
@@ -156,9 +107,6 @@ def out_dir_problem(out):
     """Why ``out`` cannot be the sweep's output directory (None when it can), found
     without creating anything (gpme_io.out_lock.output_dir_problem, and its points/ and plots/
     must be directories if present)."""
-    from pathlib import Path
-
-    from gpme_io.out_lock import output_dir_problem
     problem = output_dir_problem(out, example="reports/sweep")
     if problem:
         return problem
@@ -190,13 +138,11 @@ def main(args):
     """Run `gpme sweep`; exit status 0, 1 if a point failed unexpectedly (status 'error'),
     2 for an invalid sweep description, an unusable --out or --scheduler, or a sweep
     whose estimate is above the limits of gpme_study.cost (without --force)."""
-    from .spec import SweepSpecError, spec_from_dict
     problems = []
     out_problem = out_dir_problem(args.out)
     if out_problem:
         problems.append(out_problem)
     else:
-        from gpme_io.out_lock import busy_problem
         problems += [p for p in (busy_problem(args.out),) if p]   # before the estimate
     spec, data = None, None
     data = spec_dict(args, problems)
@@ -207,7 +153,6 @@ def main(args):
             problems += _name_flags(exc.problems, args)
     client = None
     if args.scheduler and not getattr(args, "in_process", False) and args.workers is None:
-        from .runner import connect
         client, problem = connect(args.scheduler)
         if problem:
             problems.append(problem)
@@ -224,10 +169,6 @@ def main(args):
 
 
 def _run(args, spec, data, client):
-    from pathlib import Path
-
-    from .cost import estimate
-    from .runner import pending_points
     out = Path(args.out)
     in_process = getattr(args, "in_process", False)
     report = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
@@ -243,12 +184,10 @@ def _run(args, spec, data, client):
     report(cost.summary())
     over = cost.problems()
     if over and not args.force:
-        from .spec import SweepSpecError
         print(f"error: {SweepSpecError(over)}", file=sys.stderr)
         return 2
     for line in over:
         report(f"--force given, running although {line}")
-    from gpme_io.out_lock import OutputBusyError, exclusive_output
     try:
         with exclusive_output(out):       # one sweep writing to one --out at a time
             return _sweep_and_report(args, spec, data, client, out, report, in_process)
@@ -258,12 +197,6 @@ def _run(args, spec, data, client):
 
 
 def _sweep_and_report(args, spec, data, client, out, report, in_process):
-    import json
-
-    from gpme_io.atomic import atomic_write_text
-
-    from .plots import write_plots
-    from .runner import run_sweep
     atomic_write_text(out / "sweep_spec.json", json.dumps(data, indent=1, default=str))
     table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
                       retry_errors=args.retry_errors, report=report, in_process=in_process,
@@ -271,7 +204,6 @@ def _sweep_and_report(args, spec, data, client, out, report, in_process):
     if spec.model is None:
         paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
     else:
-        from .model_metrics import heat_map_metrics
         units = {name: spec.model.unit(name) for name in spec.swept}
         units.update({name: v[0] for name, v in spec.metric_table.items()})
         paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits,

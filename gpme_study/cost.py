@@ -35,7 +35,17 @@ from typing import Callable, Optional
 import numpy as np
 
 from gpme_core.errors import GpmeError
+from gpme_core.integrate import simulate
 from gpme_core.run_cost import format_bytes, format_seconds, kernels_compiled
+from gpme_core.stability import suggest_rk4_step
+from gpme_examples.crane import crane_system, initial_state
+from gpme_io.runs import resolved_step
+
+from .model_metrics import heat_map_metrics
+from .model_paths import INTEGER_KEYS
+from .model_point import scenario_from_document
+from .plots import HEAT_MAP_METRICS
+from .point import resolved_parameters, rk4_step
 
 log = logging.getLogger("gpme.sweep")
 # what stops a point at its start (its run records the same as its status): gpme's errors
@@ -128,7 +138,6 @@ class Sampler:
 
 def _timed_run(system, q0, q_dot0, dt, steps, method, on_manifold):
     """(integration s, whole call s, rows) of a run of ``steps`` steps, every one recorded."""
-    from gpme_core.integrate import simulate
     kwargs = {"dt": dt} if method == "RK4" else {}
     start = time.perf_counter()
     df = simulate(system, steps * dt, q0, q_dot0, method=method, output_dt=dt,
@@ -179,9 +188,6 @@ def _run_plan(cost, system, t_end, output_dt, dt):
 def crane_point_plans(point, settings, sampler):
     """RunPlans of one crane point (gpme_study.point.run_point): the rigid run and, with
     n_rfe > 0, the flexible one; stops at a run that cannot start."""
-    from gpme_examples.crane import crane_system, initial_state
-
-    from .point import resolved_parameters, rk4_step
     plans = []
     try:
         params = resolved_parameters(point)
@@ -199,10 +205,6 @@ def crane_point_plans(point, settings, sampler):
 
 def model_point_plans(document, point, settings, sampler):
     """(build s, RunPlans) of one model-file point (gpme_study.model_point)."""
-    from gpme_io.runs import resolved_step
-    from gpme_core.integrate import suggest_rk4_step
-
-    from .model_point import scenario_from_document
     start = time.perf_counter()
     try:
         scenario = scenario_from_document(document, point, settings)
@@ -232,7 +234,6 @@ def _sample(points, spec):
     if spec.model is None:
         size = [pt.get("n_rfe", spec.run.n_rfe) for pt in points]
     else:
-        from .model_paths import INTEGER_KEYS
         ints = [nm for nm in points[0] if nm.rsplit(".", 1)[-1] in INTEGER_KEYS]
         size = [sum(pt[nm] for nm in ints) for pt in points]
     largest = int(np.argmax(size))
@@ -341,10 +342,8 @@ def estimate(spec, points, workers=1, dask=False, report=None, budget_s=SAMPLE_B
 
 def _figures(spec):
     """Number of figures the sweep draws (gpme_study.plots.write_plots)."""
-    from .plots import HEAT_MAP_METRICS
     if spec.model is None:
         maps = len(HEAT_MAP_METRICS)
     else:
-        from .model_metrics import heat_map_metrics
         maps = len(heat_map_metrics(spec.metric_table, spec.limits))
     return maps + (1 if spec.limits else 0)

@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from crosscheck.run_checks import transient_time
+from gpme_core.constraints import EllipseConstraint, JointProgramme
 
 FAMILIES = ("phi_max_abs", "lambda_peak", "tau_peak", "reaction_peak", "q_dot_peak",
             "limit_margin")
@@ -56,7 +57,6 @@ def coordinate_unit(model, name: str) -> str:
 def constraint_units(scenario) -> dict:
     """{constraint name: unit of Phi} ('m', '1', 'rad'); expressions are taken as lengths
     (their symbols x, y, z are in m)."""
-    from gpme_core.constraints import EllipseConstraint, JointProgramme
     out = {}
     for con, name in zip(scenario.system.bound, scenario.system.constraint_names):
         c = con.spec

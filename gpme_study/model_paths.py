@@ -29,12 +29,14 @@ written as a float.
 import copy
 import difflib
 import math
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping, Optional
 
 from gpme_io.input_files import MODEL_FILE_LIMIT, InputFileError, read_input_file
+from gpme_io.modelfile.load import CRANE_FIELDS
 
 # array-of-tables section -> the key that names an entry
 IDENTIFYING_KEYS = {"flexible": "link", "joint": "name", "drive": "joint",
@@ -102,7 +104,6 @@ class ModelDocument:
         loc = self.parameters[name]
         last = loc[-1]
         if loc[:2] == ("model", "crane") and len(loc) == 3:
-            from gpme_io.modelfile.load import CRANE_FIELDS
             return CRANE_FIELDS.get(last, ("",))[0]
         if loc[0] == "initial" and len(loc) == 3:
             return "rad or m" if loc[1] == "q" else "rad/s or m/s"
@@ -172,7 +173,6 @@ class ModelDocument:
 def read_model_document(path) -> ModelDocument:
     """The ModelDocument of the model file at ``path``; raises PathError when the file
     cannot be read or is not TOML (its content is checked when points are built)."""
-    import tomllib
     path = Path(path).resolve()
     try:
         text = read_input_file(path, "model file", MODEL_FILE_LIMIT).decode("utf-8")

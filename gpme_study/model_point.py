@@ -17,6 +17,9 @@ import numpy as np
 
 from gpme_core.errors import ModelError, ModelFileError
 from gpme_io.input_files import SIDE_FILE_LIMIT, URDF_LIMIT, InputFileError, read_input_file
+from gpme_io.modelfile import build_scenario
+from gpme_io.modelfile.load import parse_model_data, resolve_urdf
+from gpme_io.runs import simulate_scenario
 
 from . import model_metrics as mm
 from .model_paths import ModelDocument
@@ -32,8 +35,6 @@ def scenario_from_document(document: ModelDocument, point: Mapping[str, float], 
 
     Raises ModelFileError listing every problem the loader finds (file path prefixed),
     ConstraintError when the start cannot be placed on the constraints."""
-    from gpme_io.modelfile import build_scenario
-    from gpme_io.modelfile.load import parse_model_data
     data = settings.apply(document.with_values(point))
     spec, problems = parse_model_data(data, document.path)
     if problems:
@@ -45,7 +46,6 @@ def file_digests(document: ModelDocument, data: Optional[Mapping] = None) -> dic
     """{key: sha256 of the file's bytes} of the files the document names (model.urdf,
     model.side_file), so a changed URDF changes every point's key; unreadable files are
     left out (the point then fails as invalid and says why)."""
-    from gpme_io.modelfile.load import resolve_urdf
     model = (data if data is not None else document.data).get("model")
     out = {}
     if not isinstance(model, dict):
@@ -89,7 +89,6 @@ def run_model_point(document: ModelDocument, point: Mapping[str, float], setting
     note (why the |Phi| window is empty, if it is), integrator, dt_s (RK4 step, s), t_end_s,
     sim_wall_s (integration only, s), wall_time_s (the whole point, s).
     """
-    from gpme_io.runs import simulate_scenario
     start = time.perf_counter()
     row = {"key": model_point_key(document, point, settings), "status": "ok", "error": "",
            "failed_run": "", **point, "constraints_met": False, "note": "",

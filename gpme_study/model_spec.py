@@ -30,8 +30,12 @@ from pathlib import Path
 from typing import Optional
 
 from gpme_core.echo import shown
+from gpme_core.errors import ConstraintError, ModelError
+from gpme_io.modelfile.load import parse_model_data
 
+from .model_metrics import metric_columns
 from .model_paths import PathError, read_model_document
+from .model_point import scenario_from_document
 from .spec import (MAX_N_RFE, MODES, SweepSpec, SweepSpecError, _grid_points,
                    _grid_values, _lhs_points, _limits, _list_points, _number, _plot_axes,
                    _range, _swept, fill_defaults)
@@ -226,7 +230,6 @@ def _candidate_values(document, data, mode, parameters):
     """The distinct (path, value) pairs the sweep sets, as written (a grid's axis values, a
     list's values, a Latin hypercube's range ends), leaving out those already refused by
     name or value (their problems are listed): what the loader is asked about."""
-    from .model_paths import PathError
     space = ModelSpace(document)
     pairs = []
     if mode == "list":
@@ -257,7 +260,6 @@ def _value_problems(document, values, run, problems):
     (path, value) of ``values`` alone in the file, with the sweep's run settings written
     in; and the RK4 step against the output spacing (run.dt <= run.output_dt).  A value
     refused only in combination with another one stays a point with status "invalid"."""
-    from gpme_io.modelfile.load import parse_model_data
     singles = [{}] + [{name: v} for name, v in list(values)[:MAX_CHECKED_VALUES]]
     of_the_file = set()         # problems of the file itself: listed once, not per value
     for single in singles:
@@ -280,10 +282,6 @@ def _base_columns(document, run, problems) -> dict:
     """The metric columns of the model file as it is (with the sweep's run settings), built
     without placing it on its constraints (only the names are needed); problems of the file
     are appended to ``problems``."""
-    from gpme_core.errors import ConstraintError, ModelError
-
-    from .model_metrics import metric_columns
-    from .model_point import scenario_from_document
     base = dataclasses.replace(run, on_constraints=False)
     try:
         scenario = scenario_from_document(document, {}, base)

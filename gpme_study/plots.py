@@ -90,7 +90,7 @@ def _as_grid(cells, x, y, column):
 def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
     """Figure: ``metric`` over parameters x, y; infeasible cells grey with a cross, the
     contour metric = limit drawn when ``limits`` bounds this metric."""
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure    # matplotlib: heavy, loaded when a figure is drawn
     cells = cell_table(table, x, y, metric)
     fig = Figure(figsize=(6.4, 4.8))
     ax = fig.subplots()
@@ -142,7 +142,7 @@ def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
 
 
 def _mark_infeasible_cells(ax, bad, x, y, x_edges, y_edges, xs, ys):
-    from matplotlib.patches import Rectangle
+    from matplotlib.patches import Rectangle    # matplotlib: heavy, loaded when drawing
     for k, (_, row) in enumerate(bad.iterrows()):
         j, i = int(np.searchsorted(xs, row[x])), int(np.searchsorted(ys, row[y]))
         ax.add_patch(Rectangle((x_edges[j], y_edges[i]), x_edges[j + 1] - x_edges[j],
@@ -154,8 +154,9 @@ def _mark_infeasible_cells(ax, bad, x, y, x_edges, y_edges, xs, ys):
 def safe_region(table, x, y, limits, units=None):
     """Figure: each (x, y) safe (all points feasible and within every limit), over a limit,
     or infeasible; the title lists the limits."""
-    from matplotlib.figure import Figure
+    # matplotlib: heavy, loaded only when a figure is drawn
     from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
     from matplotlib.patches import Patch
     cells = cell_table(table, x, y, None, limits)
     cells["_class"] = np.where(~cells["_feasible"], INFEASIBLE,

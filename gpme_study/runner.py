@@ -9,6 +9,7 @@ model file's gpme_study.model_point.run_model_point.  Finished
 points are stored one by one (gpme_study.store), so an interrupted sweep resumes where it
 stopped; a point that fails is a row with its status and error, never a stopped sweep.
 """
+import io
 import json
 import logging
 import math
@@ -18,9 +19,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from gpme_io.atomic import atomic_write_bytes, atomic_write_text
 from gpme_core.errors import GpmeError
+from gpme_core.integrate import simulate
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
+from gpme_io.atomic import atomic_write_bytes, atomic_write_text
 
+from .model_point import model_point_key, run_model_point
 from .point import point_key, run_point
 from .store import ResultStore
 
@@ -38,7 +42,6 @@ def point_job(spec):
     key(*args, point, settings) and run(*args, point, settings)."""
     if spec.model is None:
         return point_key, run_point, ()
-    from .model_point import model_point_key, run_model_point
     return model_point_key, run_model_point, (spec.model,)
 
 
@@ -112,7 +115,7 @@ class SweepRunError(GpmeError):
 def connect(scheduler, timeout_s=CONNECT_TIMEOUT_S):
     """(Dask client, None) of the scheduler at ``scheduler``, or (None, problem) when it
     cannot be reached: a bad address, or no scheduler answering within ``timeout_s``."""
-    from dask.distributed import Client
+    from dask.distributed import Client    # Dask: heavy, only for a cluster
     try:
         return Client(scheduler, timeout=f"{timeout_s:g}s"), None
     except (OSError, ValueError, TypeError, TimeoutError) as exc:
@@ -123,7 +126,7 @@ def connect(scheduler, timeout_s=CONNECT_TIMEOUT_S):
 
 
 def _local_client(n_workers):
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client, LocalCluster    # Dask: heavy, only for a cluster
     cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
                            processes=True, dashboard_address=":0",
                            silence_logs=logging.ERROR)
@@ -182,13 +185,11 @@ class PointProgress:
 
 
 def _warm_up_worker():
-    """Import gpme and compile the numba kernels (or load them from numba's on-disk
-    cache) on a Dask worker before its first point, so that point's time is its own: a
-    few RK4 steps of the flexible crane with every row recorded (the solve, the history's
-    frame positions and energies)."""
-    from gpme_examples.crane import CraneParameters, crane_system, initial_state
-    from gpme_core.integrate import simulate
-    from gpme_study import model_point  # noqa: F401 - imported by a model file's points
+    """Compile the numba kernels (or load them from numba's on-disk cache) on a Dask
+    worker before its first point, so that point's time is its own (running this function
+    there imports this module, and with it gpme and both kinds of points, gpme_study.point
+    and gpme_study.model_point): a few RK4 steps of the flexible crane with every row
+    recorded (the solve, the history's frame positions and energies)."""
     params = CraneParameters()
     system = crane_system(1, params)
     q0, q_dot0 = initial_state(system.model, params)
@@ -196,7 +197,7 @@ def _warm_up_worker():
 
 
 def _compute(pending, spec, store, client, progress, report):
-    from dask.distributed import as_completed
+    from dask.distributed import as_completed    # Dask: heavy, only for a cluster
     _, run, args = point_job(spec)
     workers = len(client.scheduler_info().get("workers", {}))
     report(f"dask: {workers} workers at {client.scheduler.address}; importing gpme and "
@@ -244,7 +245,6 @@ def write_table(table, out_dir):
     out = Path(out_dir)
     paths = {"csv": out / TABLE_CSV, "parquet": out / TABLE_PARQUET}
     atomic_write_text(paths["csv"], table.to_csv(index=False))
-    import io
     buf = io.BytesIO()
     clean = table.copy()
     clean.attrs = {}

@@ -39,10 +39,12 @@ import difflib
 import itertools
 import json
 import math
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import qmc
 
 from gpme_core.echo import ECHO_LIMIT, shown, shown_text
 from gpme_core.errors import ModelError
@@ -191,7 +193,6 @@ def read_spec_file(path):
     try:
         text = raw.decode("utf-8")
         if suffix == ".toml":
-            import tomllib
             data = tomllib.loads(text)
         elif suffix in (".yaml", ".yml"):
             data = load_yaml(text) or {}
@@ -352,6 +353,8 @@ def spec_from_dict(data, base_dir=None):
     """
     data = dict(data or {})
     if "model" in data:
+        # import cycle spec <-> model_spec: model_spec builds on this module's points,
+        # limits and SweepSpec; the dispatch to it is here
         from .model_spec import model_spec_from_dict
         return model_spec_from_dict(data, base_dir)
     problems = []
@@ -494,7 +497,6 @@ def _lhs_points(parameters, samples, seed, problems, space=CRANE):
             ranges[c] = r
     if samples is None or seed is None or not ranges or len(ranges) != len(parameters):
         return []
-    from scipy.stats import qmc
     u = qmc.LatinHypercube(d=len(ranges), seed=np.random.default_rng(int(seed))).random(
         int(samples))
     points = []
