@@ -2,8 +2,10 @@
 os.replace, so an interrupted run never leaves a half-written file where a good one was.
 Text, bytes, CSV tables and matplotlib figures (as compact PNGs, gpme_io.png); the engine
 (gpme_core) writes no files, it returns data (issue 25)."""
+import contextlib
 import gzip
 import os
+import signal
 import tempfile
 from pathlib import Path
 
@@ -20,7 +22,9 @@ def atomic_write_bytes(path, data):
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with _signals_held():   # an interruption between mkstemp and `tmp =` left the file
+            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
+                                       suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -38,6 +42,26 @@ def atomic_write_bytes(path, data):
         if isinstance(exc, OSError) and not isinstance(exc, OutputWriteError):
             raise OutputWriteError(path, exc) from None
         raise
+
+
+# the signals gpme ends a command on (gpme.signals); held while a temporary file is created
+# so that its name is known before an interruption can unwind past it
+_HELD = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Signals held (blocked, then delivered) inside the block, where the platform allows
+    it (POSIX pthread_sigmask); a no-op elsewhere."""
+    mask = getattr(signal, "pthread_sigmask", None)
+    if mask is None:
+        yield
+        return
+    old = mask(signal.SIG_BLOCK, _HELD)
+    try:
+        yield
+    finally:
+        mask(signal.SIG_SETMASK, old)
 
 
 def atomic_write_text(path, text):
