@@ -85,7 +85,7 @@ class ProgrammedMotion:
     model      : gpme_core.model.Model
     constraints: sequence of constraint specs (gpme_core.constraints)
     dependent  : names of the m dependent coordinates, or None to choose them by pivoting
-                 on the constraint Jacobian (:meth:`choose_dependent` with a state;
+                 on the constraint Jacobian (:meth:`with_pivoted_dependent` with a state;
                  gpme_core.integrate.simulate chooses them for its run without setting
                  them here)
     baumgarte  : (alpha, beta) in 1/s for Phi_ddot + 2 alpha Phi_dot + beta^2 Phi = 0
@@ -206,8 +206,8 @@ class ProgrammedMotion:
 
     def _require_partition(self):
         if self.dependent is None:
-            raise ModelError("dependent coordinates not chosen: pass dependent=[...] or call "
-                             "choose_dependent(t, q) first")
+            raise ModelError("dependent coordinates not chosen: pass dependent=[...] or use "
+                             "with_pivoted_dependent(t, q) (a new system)")
 
     # --------------------------------------------------------------- evaluation
     def constraints(self, t, q, q_dot, kin=None):
