@@ -363,13 +363,12 @@ def estimate_runs(scenarios, quick, force):
         for case in ("rigid", "flexible"):
             _say(f"  paper, {case} crane, {t_end:g} s:")
             run_budget(f"the paper's {case} crane", force)(
-                paper.run_case(case, t_end=t_end, estimate_only=True))
+                paper.estimate_case(case, t_end=t_end))
         return
-    from gpme_io.runs import simulate_scenario
+    from gpme_io.runs import estimate_scenario
     for scenario in scenarios:
         _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
-        run_budget(scenario.name, force)(simulate_scenario(scenario, quick=quick,
-                                                           estimate_only=True))
+        run_budget(scenario.name, force)(estimate_scenario(scenario, quick=quick))
 
 
 def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):

@@ -138,7 +138,7 @@ def _simulate_paper(args):
             return df
 
         def estimate(dt, case=case, settings=settings):
-            return paper.run_case(case, dt=dt, estimate_only=True, **settings)
+            return paper.estimate_case(case, dt=dt, **settings)
 
         print(f"simulating {label}, t_end = {t_end:g} s ...", flush=True)
         start = "the paper's step" if n <= paper.DEFAULT_N_RFE else "half the stability limit"
@@ -150,7 +150,7 @@ def _simulate_paper(args):
 
 
 def _simulate_models(args):
-    from gpme_io.runs import simulate_scenario, write_run_outputs
+    from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
     paths, rows = {}, []
     for scenario in load_model_files(args.model):
         t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
@@ -166,8 +166,7 @@ def _simulate_models(args):
             return df
 
         def estimate(dt, scenario=scenario, t_end=t_end):
-            return simulate_scenario(scenario, t_end=t_end, dt=dt, method="RK4",
-                                     estimate_only=True)
+            return estimate_scenario(scenario, t_end=t_end, dt=dt, method="RK4")
 
         method = args.method or scenario.integrator
         df, model_rows = _run_checked(

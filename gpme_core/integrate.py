@@ -14,6 +14,7 @@ coordinates: the system passed to :func:`simulate` is not changed.  When the par
 becomes badly conditioned (gpme_core.gpme.SWITCH_RCOND) the run re-chooses it by pivoting
 and records the switch in ``df.attrs["events"]`` (see :func:`simulate`).
 """
+import inspect
 import logging
 import time
 
@@ -341,7 +342,7 @@ def _scipy(rhs, model, t_end, y0, method, output_dt, rtol, atol, n, max_step=Non
 def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=None,
              switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
-             estimate_only=False, max_wall_s=None, compiled=True):
+             max_wall_s=None, compiled=True):
     """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
@@ -361,7 +362,6 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
                  (gpme_core.progress.ProgressCallback): the first call's numba compilation
                  (Compiling) and where the run is (Progress).  The engine prints nothing;
                  gpme_io.progress draws them on a terminal or in a log.
-    estimate_only: check the inputs and the step, then return the RunCost without running
     max_wall_s : s, stop the run with a SimulationError once it has taken this long (None:
                  no limit); the guard for methods whose cost is not known before the run
     method     : "RK4" (fixed step, explicit), "RadauIIA" (fixed step, implicit: three-stage
@@ -395,6 +395,35 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     they happened; with the solve_ivp methods "t" is the time of the evaluation that
     switched, which may belong to a step the method later rejected.
     """
+    return _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
+                         on_manifold, progress, switch_rcond, check_step, before_run,
+                         max_wall_s, compiled, estimate_only=False)
+
+
+# simulate's settings with their defaults, in its order (estimate_simulation takes the same)
+_SETTINGS = {name: p.default for name, p in inspect.signature(simulate).parameters.items()
+             if p.default is not inspect.Parameter.empty}
+
+
+def estimate_simulation(system, t_end, q0, q_dot0, **settings):
+    """gpme_core.run_cost.RunCost of ``simulate(system, t_end, q0, q_dot0, **settings)``
+    without running it: the inputs and the step are checked as simulate checks them (the
+    same errors), and one right-hand-side evaluation is timed (after compilation).
+    settings: simulate's keyword arguments."""
+    unknown = set(settings) - set(_SETTINGS)
+    if unknown:
+        raise TypeError(f"estimate_simulation() got unexpected settings {sorted(unknown)}; "
+                        f"simulate's are {list(_SETTINGS)}")
+    merged = {**_SETTINGS, **settings}
+    return _plan_and_run(system, t_end, q0, q_dot0, *(merged[k] for k in _SETTINGS),
+                         estimate_only=True)
+
+
+def _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
+                  on_manifold, progress, switch_rcond, check_step, before_run, max_wall_s,
+                  compiled, estimate_only):
+    """simulate's work (see there); with ``estimate_only`` it stops before the first step
+    and returns the RunCost (estimate_simulation)."""
     if not isinstance(system, ProgrammedMotion):
         raise ModelError(f"system must be a gpme_core.gpme.ProgrammedMotion (a model with its "
                          f"constraints; ProgrammedMotion(model) for none), got "

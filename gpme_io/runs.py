@@ -6,7 +6,7 @@ from pathlib import Path
 from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.integrate import estimate_simulation, simulate, suggest_rk4_step
 from gpme_core.methods import METHODS, RADAU_IIA, RK4
 from gpme_io.file_names import named_path
 from gpme_io.progress import progress_callback
@@ -25,19 +25,8 @@ def resolved_step(scenario, dt=None):
     return float(step)
 
 
-def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
-                      output_dt=None, before_run=None, estimate_only=False, max_wall_s=None):
-    """History DataFrame of ``scenario`` from its initial state.
-
-    t_end  : s, default scenario.t_run(quick)
-    dt     : s, RK4 step, default :func:`resolved_step`; RadauIIA's step, default the model
-             file's when it chose RadauIIA, else gpme_core.integrate.RADAU_IIA_STEP
-    method : one of gpme_core.methods.METHODS, default the scenario's integrator; with an
-             adaptive method a given dt is its largest step
-    progress : True (a bar on a terminal, a few lines in a log: gpme_io.progress), False
-             (silent) or a callable given the run's events (gpme_core.progress)
-    before_run, estimate_only, max_wall_s : as gpme_core.integrate.simulate
-    """
+def _run_settings(scenario, t_end, dt, method, quick, output_dt):
+    """(method, t_end s, output_dt s, step s or None) of one run of ``scenario``."""
     method = method or scenario.integrator
     if method not in METHODS:
         raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
@@ -49,13 +38,37 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
         step = scenario.dt           # the model file's RadauIIA step (None: its default)
     else:
         step = dt
+    return method, t_end, out_dt, step
+
+
+def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
+                      output_dt=None, before_run=None, max_wall_s=None):
+    """History DataFrame of ``scenario`` from its initial state.
+
+    t_end  : s, default scenario.t_run(quick)
+    dt     : s, RK4 step, default :func:`resolved_step`; RadauIIA's step, default the model
+             file's when it chose RadauIIA, else gpme_core.integrate.RADAU_IIA_STEP
+    method : one of gpme_core.methods.METHODS, default the scenario's integrator; with an
+             adaptive method a given dt is its largest step
+    progress : True (a bar on a terminal, a few lines in a log: gpme_io.progress), False
+             (silent) or a callable given the run's events (gpme_core.progress)
+    before_run, max_wall_s : as gpme_core.integrate.simulate
+    """
+    method, t_end, out_dt, step = _run_settings(scenario, t_end, dt, method, quick, output_dt)
     df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
                   output_dt=out_dt, progress=progress_callback(progress), dt=step,
-                  before_run=before_run, estimate_only=estimate_only, max_wall_s=max_wall_s)
-    if estimate_only:
-        return df
+                  before_run=before_run, max_wall_s=max_wall_s)
     df.attrs["scenario"] = scenario.name
     return df
+
+
+def estimate_scenario(scenario, t_end=None, dt=None, method=None, quick=False,
+                      output_dt=None):
+    """gpme_core.run_cost.RunCost of :func:`simulate_scenario` with the same arguments,
+    without running it (gpme_core.integrate.estimate_simulation)."""
+    method, t_end, out_dt, step = _run_settings(scenario, t_end, dt, method, quick, output_dt)
+    return estimate_simulation(scenario.system, t_end, scenario.q0, scenario.q_dot0,
+                               method=method, output_dt=out_dt, dt=step)
 
 
 def events_json(df):

@@ -3,7 +3,7 @@ CSV size); its wall time is measured (docs/runs.md), never asserted."""
 import numpy as np
 import pytest
 
-from gpme_core.integrate import history_columns, simulate
+from gpme_core.integrate import estimate_simulation, history_columns, simulate
 from gpme_core.run_cost import CSV_BYTES_PER_VALUE, estimate_run, time_evaluation
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 
@@ -14,7 +14,7 @@ def test_counts_match_the_run(n_rfe):
     system = crane_system(n_rfe, params)
     q0, q_dot0 = initial_state(system.model, params)
     dt = 1e-4 if n_rfe == 0 else 4e-5
-    cost = simulate(system, 0.05, q0, q_dot0, dt=dt, output_dt=1e-3, estimate_only=True)
+    cost = estimate_simulation(system, 0.05, q0, q_dot0, dt=dt, output_dt=1e-3)
     df = simulate(system, 0.05, q0, q_dot0, dt=dt, output_dt=1e-3)
     assert cost.steps * 4 == df.attrs["rhs_evaluations"] and cost.exact
     assert (cost.rows, cost.columns) == df.shape == (51, history_columns(system))
@@ -42,3 +42,16 @@ def test_time_evaluation_is_positive_and_finite():
                                                                                 params)))
     first, per_eval = time_evaluation(system, *initial_state(system.model, params))
     assert np.isfinite(per_eval) and 0 < per_eval < 1.0 and first > 0
+
+
+def test_simulate_returns_a_history_and_estimate_simulation_a_cost():
+    """One return type per function (issue 25): simulate has no estimate flag, and
+    estimate_simulation takes simulate's settings and refuses others."""
+    system = crane_system(0)
+    q0, q_dot0 = initial_state(system.model)
+    with pytest.raises(TypeError):
+        simulate(system, 0.01, q0, q_dot0, estimate_only=True)
+    with pytest.raises(TypeError, match="unexpected settings"):
+        estimate_simulation(system, 0.01, q0, q_dot0, estimate_only=True)
+    cost = estimate_simulation(system, 0.01, q0, q_dot0, dt=1e-4)
+    assert cost.steps == 100
