@@ -16,12 +16,12 @@ given when an expression is not finite at the initial state.  The refused functi
 reasons and singular_sets are gpme_core.expression_checks', shared with the Python API.
 """
 import ast
-import difflib
 import math
 from typing import Mapping, Optional
 
 import sympy as sp
 
+from gpme_core.echo import did_you_mean
 from gpme_core import expression_bounds as bounds
 from gpme_core import expression_checks as checks
 
@@ -236,8 +236,7 @@ def _op_text(op: ast.AST) -> str:
 
 
 def _did_you_mean(name: str, choices: list) -> str:
-    close = difflib.get_close_matches(name, choices, n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+    return did_you_mean(name, choices)
 
 
 def depends_on(expr: sp.Expr, names) -> bool:

@@ -16,7 +16,6 @@ back.  docs/urdf.md shows the layout:
 This module only knows the file: its path, its text, its validation.
 """
 import dataclasses
-import difflib
 import json
 import math
 import warnings
@@ -24,6 +23,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Optional
 
+from gpme_core.echo import did_you_mean
 from gpme_core import time_functions
 from gpme_core.errors import ModelError, ModelFileError, SectionWarning
 from gpme_core.model import Model
@@ -223,9 +223,8 @@ def _unknown_keys(where: str, given, known) -> list:
     for key in given:
         if key in known:
             continue
-        close = difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.6)
-        mean = f" (did you mean {close[0]!r}?)" if close else ""
-        out.append(f"{where}: unknown key {key!r}{mean}; the keys are {', '.join(known)}")
+        out.append(f"{where}: unknown key {key!r}{did_you_mean(key, known)}; the keys are "
+                   f"{', '.join(known)}")
     return out
 
 
@@ -364,9 +363,7 @@ def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
     if unknown or missing:
         parts = []
         for p in unknown:
-            close = difflib.get_close_matches(str(p), fields, n=1, cutoff=0.6)
-            parts.append(f"unknown parameter {p!r}"
-                         + (f" (did you mean {close[0]!r}?)" if close else ""))
+            parts.append(f"unknown parameter {p!r}{did_you_mean(p, fields)}")
         if missing:
             parts.append(f"missing parameter{'s' if len(missing) > 1 else ''} "
                          f"{', '.join(missing)}")

@@ -27,7 +27,6 @@ file.
 written as a float.
 """
 import copy
-import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -35,6 +34,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping, Optional
 
+from gpme_core.echo import did_you_mean
 from gpme_io.input_files import MODEL_FILE_LIMIT, InputFileError, read_input_file
 from gpme_io.modelfile.load import CRANE_FIELDS
 
@@ -165,9 +165,7 @@ class ModelDocument:
         if name.startswith("param."):
             return (f"{name!r}: model files have no [param] table of named numbers for "
                     "expressions (gpme_io.modelfile does not read one)" + listing)
-        close = difflib.get_close_matches(name, valid, n=3, cutoff=0.6)
-        mean = f" (did you mean {', '.join(map(repr, close))}?)" if close else ""
-        return f"unknown parameter path {name!r}{mean}" + listing
+        return f"unknown parameter path {name!r}{did_you_mean(name, valid, n=3)}" + listing
 
 
 def read_model_document(path) -> ModelDocument:

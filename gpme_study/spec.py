@@ -35,7 +35,6 @@ that model file instead of the built-in crane: parameters are dotted paths into 
 and the run settings and metrics are generic (gpme_study.model_spec).
 """
 import dataclasses
-import difflib
 import itertools
 import json
 import math
@@ -47,6 +46,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from gpme_core.echo import ECHO_LIMIT, shown, shown_text
+from gpme_core.echo import did_you_mean as echo_did_you_mean
 from gpme_core.errors import ModelError
 from gpme_examples.crane import CraneParameters
 from gpme_io.input_files import SWEEP_FILE_LIMIT, InputFileError, read_input_file
@@ -303,12 +303,7 @@ def _check_value(name, value, where, problems):
 
 def did_you_mean(name, valid):
     """' (did you mean 'x', 'y'?)' for the names of ``valid`` close to ``name``, or ''."""
-    close = difflib.get_close_matches(str(name), list(valid), n=3, cutoff=0.6)
-    if not close:
-        lower = {v.lower(): v for v in valid}
-        close = [lower[m] for m in difflib.get_close_matches(str(name).lower(), list(lower),
-                                                             n=3, cutoff=0.6)]
-    return f" (did you mean {', '.join(map(shown, close))}?)" if close else ""
+    return echo_did_you_mean(name, valid, n=3)
 
 
 def _check_name(name, where, problems):

@@ -10,13 +10,13 @@ choose the dependent coordinates and the RK4 step when the file leaves them out.
 Everything the file leaves to a default, and everything the reader left out, is a line of
 ``Scenario.notes``.
 """
-import difflib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
+from gpme_core.echo import closest
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                                    SympyPointConstraint)
 from gpme_core.errors import ConstraintError, ModelError, ModelFileError
@@ -121,7 +121,8 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
 # ====================================================================== name checks
 def _unknown(what: str, name: str, choices) -> str:
     choices = list(choices)
-    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.5)
+    # a looser cutoff: link and joint names of real URDFs are long and share prefixes
+    close = closest(name, choices, cutoff=0.5)
     mean = f"did you mean {close[0]!r}? " if close else ""
     shown = ", ".join(choices[:30]) + (f", ... ({len(choices)} in all)" if len(choices) > 30
                                         else "")

@@ -8,7 +8,6 @@ gpme_io.modelfile.build and listed with these (gpme_io.modelfile.load_model_file
 docs/models.md describes the format.
 """
 import dataclasses
-import difflib
 import importlib.metadata
 import math
 import tomllib
@@ -17,6 +16,7 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
+from gpme_core.echo import closest
 from gpme_core import time_functions as tfn
 from gpme_core.errors import ConstraintError, ModelError
 from gpme_core.methods import FIXED_STEP_METHODS
@@ -105,7 +105,7 @@ class _Checker:
         allowed = list(allowed)
         for key in table:
             if key not in allowed:
-                close = difflib.get_close_matches(key, allowed, n=1)
+                close = closest(key, allowed)
                 mean = f"did you mean {close[0]!r}? " if close else ""
                 self.add(_join(path, key), f"unknown key; {mean}allowed here: "
                          f"{', '.join(allowed)}{hint}")
@@ -181,7 +181,7 @@ class _Checker:
             return None
         if choices is not None and v not in choices:
             same_case = [ch for ch in choices if ch.lower() == v.lower()]
-            close = same_case or difflib.get_close_matches(v, list(choices), n=1)
+            close = same_case or closest(v, choices)
             mean = f"; did you mean {close[0]!r}?" if close else ""
             self.add(where, f"{v!r} is not one of {', '.join(map(repr, choices))}{mean}")
             return None
@@ -394,7 +394,7 @@ def resolve_urdf(written: str, model_file: Path, c: Optional[_Checker] = None) -
                 out = Path(dist.locate_file(files[rel])).resolve()
             else:
                 urdfs = [k for k in files if k.endswith(".urdf")]
-                close = difflib.get_close_matches(rel, urdfs, n=3, cutoff=0.5)
+                close = closest(rel, urdfs, n=3, cutoff=0.5)     # long paths: looser
                 problems.append(f"{ROBOT_DATA_DISTRIBUTION} {dist.version} has no {rel!r} under "
                                 f"robots/; " + (f"close matches: {close}" if close else
                                                 f"it has {len(urdfs)} URDFs, e.g. {urdfs[:3]}"))
