@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
+import pandas as pd
 
 COLUMNS = ("engine", "model", "quantity", "case", "entry", "gpme_value", "engine_value",
            "abs_error", "rel_error", "scale", "tol_abs", "tol_rel", "status", "passed", "reason")
@@ -152,7 +153,6 @@ def row_status(df) -> "np.ndarray":
     """(len(df),) status of each row of a comparison table: its ``status`` column, but
     "fail" wherever ``passed`` is False (a caller that overrode ``passed``, or a table
     from before the status column)."""
-    import pandas as pd
     n = len(df)
     st = df["status"] if "status" in df.columns else pd.Series([None] * n, index=df.index)
     passed = df["passed"].astype(bool) if "passed" in df.columns else \

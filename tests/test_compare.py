@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 
 from crosscheck.compare import COLUMNS, Tolerance, compare, row_status, tolerance_for
-from crosscheck.reports.tables import html_table, summarise, worst_first, worst_status
+from crosscheck.reports.html import html_table
+from crosscheck.reports.tables import summarise, worst_first, worst_status
 
 TOL = Tolerance(1e-12, 1e-9, "test tolerance: exact numbers up to a few roundings")
 UNGATED = Tolerance(np.inf, 0.0, "information only: the engines differ by design")

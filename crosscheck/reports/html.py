@@ -10,11 +10,14 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
+import jinja2
 import numpy as np
+import pandas as pd
 
 from gpme_io.xml_text import xml_safe_text
 
 from ..compare import FAIL, row_status
+from . import tables as report
 
 TEMPLATES = Path(__file__).with_name("templates")
 WIDE_COLUMNS = ("reason", "Pinocchio side")   # long text: given room instead of wrapped
@@ -82,7 +85,6 @@ def printable(value):
 def environment():
     """The Jinja2 environment of the report templates (autoescape, undefined names are
     errors, the ``number`` filter)."""
-    import jinja2
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)),
                              autoescape=True, undefined=jinja2.StrictUndefined,
                              trim_blocks=True, lstrip_blocks=True, finalize=printable)
@@ -99,6 +101,12 @@ def render_table(tab, table_id=None):
     """The HTML of one :class:`Table` (the ``table`` macro alone)."""
     macro = environment().get_template("macros.html.j2").module.table
     return str(macro(tab, table_id))
+
+
+def html_table(df, status_column=None, max_rows=None, left_columns=()):
+    """The HTML of a table of ``df`` (:func:`table`, rendered by the templates' ``table``
+    macro); each row gets the class of its status ('pass', 'fail', 'info')."""
+    return render_table(table(df, status_column, max_rows, left_columns))
 
 
 def section(title, text=(), table=None, figures=(), items=(), id=None):
@@ -121,7 +129,6 @@ def reason_refs(*frames):
     """The reasons of ``frames`` numbered once: ({reason: "R<k>"}, a :class:`Table` of
     them); replace each frame's reason column with :func:`cite_reasons` so that a long
     reason is printed once per page, not once per row."""
-    import pandas as pd
     ids = {}
     for df in frames:
         for reason in df.get("reason", pd.Series(dtype=object)).dropna():
@@ -146,7 +153,6 @@ def comparison_page(engine, title, version, df, intro, lead_sections, convention
     its ``conventions`` text, the WORST_ROWS worst rows, the summary per model and quantity
     and the numbered tolerance reasons.  df: the engine's comparison rows (columns of
     crosscheck.compare.COLUMNS plus ``section``); engine: its checks/ directory name."""
-    from . import tables as report
     if df.empty:
         return engine_page(title, f"{title} {version}: nothing compared", False, [], [])
     summary = report.summarise(df, keys=("section", "model", "quantity"))

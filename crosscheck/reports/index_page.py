@@ -11,6 +11,7 @@ Images are linked, not embedded: each plot is stored once, as a PNG of the repor
 """
 from pathlib import Path
 
+import pandas as pd
 from markupsafe import Markup
 
 from gpme_io.file_names import file_stem
@@ -20,6 +21,7 @@ from .check_plots import write_spread_plots
 from .html import render, table as html_table_data
 from .matrix import legend, matrix_blocks
 from .rows import CHECKS_DIR, TOLERANCES_FILE, check_id, slice_path
+from .run_diff import diff_lines, headline
 from .tables import atomic_write_text, checks_worst_first
 
 PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
@@ -65,7 +67,6 @@ def diff_section(diff):
     """The "since the previous run" section (HTML) of summary.json's ``diff``
     (crosscheck.reports.run_diff): one headline, then the lists, each capped, and the
     definition of the measure folded."""
-    from .run_diff import diff_lines, headline
     if not diff:
         return Markup("")
     if diff.get("previous") is None:
@@ -89,7 +90,6 @@ def _status_counts(summary):
 
 
 def _verdict(summary, rows, meta, diff):
-    from .run_diff import headline
     counts = _status_counts(summary)
     ok = counts[FAIL] == 0
     failing = summary[summary["status"] == FAIL]
@@ -265,7 +265,6 @@ def _benchmarks(bench_dir):
                         bench_dir / "run_costs.csv")
     if not (png.exists() and evals.exists() and runs.exists()):
         return None
-    import pandas as pd
     return {"tables": [html_table_data(pd.read_csv(evals), status_column="-"),
                        html_table_data(pd.read_csv(runs), status_column="-",
                                        left_columns=("case", "engine", "method"))],

@@ -2,7 +2,8 @@
 
 Every file is written to a temporary file in the same directory and moved into place
 with os.replace, so an interrupted run never leaves a half-written file where a good
-one was.  The HTML itself comes from templates (crosscheck.reports.html).
+one was.  The HTML itself, a table's too (html_table), comes from templates
+(crosscheck.reports.html, which builds its pages on the summaries here).
 """
 import numpy as np
 import pandas as pd
@@ -15,14 +16,6 @@ from ..compare import FAIL, INFO, PASS, STATUSES, row_status
 def write_csv(df, path):
     """Write a DataFrame as CSV atomically (no index column)."""
     atomic_write_csv(df, path)
-
-
-def html_table(df, status_column=None, max_rows=None, left_columns=()):
-    """The HTML of a table of ``df`` (crosscheck.reports.html.table, rendered by the
-    templates' ``table`` macro); each row gets the class of its status ('pass', 'fail',
-    'info')."""
-    from .html import render_table, table
-    return render_table(table(df, status_column, max_rows, left_columns))
 
 
 def worst_first(df):
