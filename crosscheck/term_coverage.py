@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gpme_io.atomic import atomic_write_text
+from gpme_io.modelfile import load_model_file
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                                    SympyPointConstraint, evaluate_constraints)
 from gpme_core.dynamics import dynamics_terms
@@ -50,6 +51,8 @@ from gpme_core.integrate import simulate, suggest_rk4_step
 from gpme_core.kinematics import point_kinematics
 from gpme_core.model import PRISMATIC, REVOLUTE
 from gpme_core.rfem import BeamSection
+
+from .crane_cases import crane_cases
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -269,15 +272,13 @@ class TermCoverageError(RuntimeError):
 # ----------------------------------------------------------------------------- examples
 def shipped_examples(root: Path = REPO) -> list:
     """The shipped examples, in order: the crane cases of `gpme verify`'s gpme step without
-    --model (crosscheck.verify.default_scenarios), every models/*.toml (models/zoo/ is not
-    shipped here) and every examples/*/*.toml.  A file whose scenario has the name of one
-    already listed (models/crane_rigid.toml and crane_flexible.toml: the crane cases,
-    tests/test_modelfile.py checks they agree) is named in that example's origin instead."""
-    from gpme_io.modelfile import load_model_file
-
-    from .verify import default_scenarios
+    --model (crosscheck.crane_cases, which crosscheck.verify.default_scenarios gives), every
+    models/*.toml (models/zoo/ is not shipped here) and every examples/*/*.toml.  A file
+    whose scenario has the name of one already listed (models/crane_rigid.toml and
+    crane_flexible.toml: the crane cases, tests/test_modelfile.py checks they agree) is named
+    in that example's origin instead."""
     out = []
-    for scenario in default_scenarios("gpme", quick=True):
+    for scenario in crane_cases("gpme", quick=True):
         n_rfe = len(scenario.model.flexible_coordinates) // 3
         out.append([scenario.name, f"crane_scenario({n_rfe}), gpme verify's default", scenario])
     files = sorted((root / "models").glob("*.toml")) + sorted((root / "examples").glob("*/*.toml"))
@@ -294,7 +295,6 @@ def shipped_examples(root: Path = REPO) -> list:
 
 def example_from_file(path) -> Example:
     """An Example of one model file (for a model that is not shipped, e.g. in a test)."""
-    from gpme_io.modelfile import load_model_file
     scenario = load_model_file(path)
     return Example(scenario.name, str(path), lambda: scenario)
 

@@ -31,8 +31,15 @@ from pathlib import Path
 
 import pandas as pd
 
-from gpme_core.errors import OutputWriteError
+from gpme_core.errors import GpmeError, OutputWriteError
+from gpme_examples import paper
+from gpme_io.budget import run_budget
+from gpme_io.paper_outputs import write_outputs
+from gpme_io.progress import progress_callback
+from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
+from gpme_io.scenario import crane_scenario
 
+from .accurate_step import run_accurately
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .crane_cases import crane_cases
 from .engines import missing_message
@@ -40,8 +47,11 @@ from . import run_store
 from . import rfem_reference
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
+from .reports.junit import write_junit_xml
 from .reports.rows import check_name, normalise, other_rows, own_rows, write_rows
+from .reports.summary_md import write_summary_md
 from .reports.tables import atomic_write_text, summarise, write_csv
+from .run_checks import rows_frame, run_rows, run_warnings
 from .verify_meta import environment
 
 STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
@@ -61,11 +71,6 @@ def default_scenarios(step, quick):
 
 def _paper_step(run_dir, quick, progress, max_wall_s=None):
     """The paper's two crane runs, with the paper's figures (default run)."""
-    from gpme_examples import paper
-    from gpme_io.paper_outputs import write_outputs
-    from gpme_io.progress import progress_callback
-    from gpme_io.scenario import crane_scenario
-    from .run_checks import rows_frame, run_rows
     t_end = paper.QUICK_T_END if quick else paper.T_END
     runs, rows, rfem_rows = {}, [], []
     for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
@@ -84,9 +89,6 @@ def _paper_step(run_dir, quick, progress, max_wall_s=None):
 
 def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     """Each scenario's own gpme run: history, figures and the run checks."""
-    from crosscheck.accurate_step import run_accurately
-    from gpme_io.runs import simulate_scenario, write_run_outputs
-    from .run_checks import rows_frame, run_rows
     rows, rfem_rows = [], []
     for scenario in scenarios:
         _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
@@ -159,7 +161,6 @@ def _missing_engine_row(step, message):
 def _report_crash(staging, step, exc):
     """One line on the console; the traceback of an unexpected exception (not a gpme input
     or run error, whose message says it all) into <run>/<step>_crash.txt."""
-    from gpme_core.errors import GpmeError
     if isinstance(exc, GpmeError):
         _say(f"[{step}] stopped: {exc}")
         return
@@ -237,7 +238,6 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
 
 def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None,
                previous=(None, "", None)):
-    from .run_checks import run_warnings
     start = time.perf_counter()
     tables, timings, prerequisites = {}, {}, []
     record = _models_record(scenarios if scenarios is not None else
@@ -355,17 +355,14 @@ def estimate_runs(scenarios, quick, force):
     """Print the estimated cost of the gpme runs of a verification before any work, and
     refuse (gpme_io.budget.BudgetError) one above the limits unless ``force``; an input problem
     found on the way (an unstable step in a model file, say) is raised here too."""
-    from gpme_io.budget import run_budget
     _say("estimated cost of the gpme runs (the engine steps take about as long again):")
     if scenarios is None:
-        from gpme_examples import paper
         t_end = paper.QUICK_T_END if quick else paper.T_END
         for case in ("rigid", "flexible"):
             _say(f"  paper, {case} crane, {t_end:g} s:")
             run_budget(f"the paper's {case} crane", force)(
                 paper.estimate_case(case, t_end=t_end))
         return
-    from gpme_io.runs import estimate_scenario
     for scenario in scenarios:
         _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
         run_budget(scenario.name, force)(estimate_scenario(scenario, quick=quick))
@@ -374,8 +371,6 @@ def estimate_runs(scenarios, quick, force):
 def write_ci_outputs(run_dir, document, junit_xml=None, summary_md=None):
     """Write the JUnit XML and the markdown summary of the run in ``run_dir`` (``document``:
     its summary.json); returns the paths written."""
-    from .reports.junit import write_junit_xml
-    from .reports.summary_md import write_summary_md
     written = []
     if junit_xml is not None:
         written.append(write_junit_xml(junit_xml, document, report_dir=str(run_dir)))
