@@ -26,6 +26,7 @@ from typing import Callable, Optional
 import numpy as np
 import sympy as sp
 from numpy.typing import NDArray
+from scipy.interpolate import CubicSpline
 
 from gpme_core import constraints as gc
 from gpme_core import time_functions as tfn
@@ -66,7 +67,6 @@ def _time_derivatives(function) -> Callable[[float], tuple]:
         f = sp.lambdify(T, [expr, sp.diff(expr, T), sp.diff(expr, T, 2)], "numpy")
         return lambda t: tuple(float(v) for v in f(t))
     if hasattr(function, "times") and hasattr(function, "values"):
-        from scipy.interpolate import CubicSpline
         spline = CubicSpline(np.asarray(function.times, float), np.asarray(function.values, float),
                              bc_type="natural")
         t0, t1 = float(function.times[0]), float(function.times[-1])

@@ -52,6 +52,7 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 import pandas as pd
 from pydrake.multibody.tree import JacobianWrtVariable, MultibodyForces
+from tqdm import tqdm
 
 from gpme_core.errors import GpmeError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
@@ -60,10 +61,12 @@ from gpme_core.kinematics import chain_kinematics, point_kinematics
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..reports import tables as report
+from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..states import FULL, QUICK, scenario_states
 from ..tolerances import TOLERANCES as TERM_TOLERANCES, solve_tolerances
 from .model import DrakeSystem, drake_version, for_model
+from .runs import run_section
 
 ENGINE = "drake"
 SECTIONS = ("terms", "runs")
@@ -322,10 +325,6 @@ class CaseRecord:
 def _progress(enabled, total):
     if not enabled:
         return None
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return None
     return tqdm(total=total, desc="drake crosscheck", unit="scenario")
 
 
@@ -382,7 +381,6 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
             except GpmeError as exc:     # a model Drake cannot express is a failed check
                 frames.append(pd.DataFrame([_failed_row(scenario, "terms", "terms", exc)]))
         if "runs" in sections:
-            from .runs import run_section
             try:
                 rows = run_section(scenario, quick, log.info, urdf_dir=out_dir / URDF_SUBDIR)
             except GpmeError as exc:
@@ -413,7 +411,6 @@ CONVENTIONS = (
 
 def _html(df, records, wall, quick):
     """drake.html (crosscheck.reports.html.comparison_page)."""
-    from ..reports.html import comparison_page, section, table
     version = drake_version()
     cases = pd.DataFrame([{"model": r.label, "n": r.n, "states": r.n_states,
                            "Drake side": "; ".join(r.notes)} for r in records])

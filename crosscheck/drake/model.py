@@ -31,12 +31,15 @@ Drake body; its body frame is the gpme frame.  No gpme kinematics or dynamics co
 here: only data (the URDF text and the side file) and names.
 """
 import logging
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version as dist_version
 from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
+import pydrake
 from numpy.typing import NDArray
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
@@ -45,7 +48,7 @@ from pydrake.multibody.tree import (BodyIndex, JointIndex, PrismaticJoint, Prism
 
 from gpme_core.errors import ModelFileError
 from gpme_io.file_names import named_path
-from gpme_io.urdf import load_side_file, side_file_path
+from gpme_io.urdf import load_side_file, side_file_path, write_urdf
 
 log = logging.getLogger("gpme.crosscheck.drake")
 WORLD = "world"
@@ -57,14 +60,9 @@ DAMPING_RTOL = 4.0 * np.finfo(float).eps
 
 def drake_version() -> str:
     """Version of the installed Drake (the ``drake`` distribution), e.g. "1.51.1"."""
-    try:
-        import pydrake
-        version = getattr(pydrake, "__version__", None)
-        if version:
-            return str(version)
-    except ImportError:                     # pragma: no cover - module imported pydrake
-        pass
-    from importlib.metadata import PackageNotFoundError, version as dist_version
+    version = getattr(pydrake, "__version__", None)
+    if version:
+        return str(version)
     try:
         return dist_version("drake")
     except PackageNotFoundError:
@@ -139,7 +137,6 @@ def _joints(plant):
 def urdf_root(urdf_path: Path) -> Optional[str]:
     """Name of the URDF's root link (the one link that is no joint's child), or None when
     there is not exactly one (Drake's parser reports that itself)."""
-    import xml.etree.ElementTree as ET
     try:
         robot = ET.parse(urdf_path).getroot()
     except (ET.ParseError, OSError):
@@ -303,7 +300,6 @@ def for_model(model, urdf_dir, name: Optional[str] = None) -> DrakeSystem:
     """The gpme ``model`` written by gpme_io.urdf.write_urdf to ``urdf_dir/<name>.urdf``
     (default the model's name) and read back by :func:`from_urdf`, its damping checked
     against the model's."""
-    from gpme_io.urdf import write_urdf
     path = named_path(urdf_dir, name or model.name, ".urdf")
     path.parent.mkdir(parents=True, exist_ok=True)
     write_urdf(model, path)

@@ -22,6 +22,7 @@ Drake's global error at h/4 is estimated from its own three runs, (x_h/2 - x_h/4
 (p - 1 = 3); the two finest runs must agree within the sum of both estimates plus round-off
 floors.  No gpme kinematics, dynamics or integration code runs on Drake's side.
 """
+import tempfile
 import time
 from typing import Optional
 
@@ -180,7 +181,6 @@ def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
     gpme: one per state column (the two finest runs, gated by both engines' halving errors
     and round-off floors, crosscheck.halving_gates.run_rows) and one observed-order row per
     engine; or one information row when the run is over run_gates' step budget."""
-    import tempfile
     log = log or (lambda msg: None)
     free = free_variant(scenario)
     t_end, dt = run_t_end(scenario, quick), run_step(scenario)

@@ -28,12 +28,14 @@ import exudyn as exu
 import numpy as np
 import pandas as pd
 import pinocchio as pin
+from tqdm import tqdm
 
 from gpme_core.errors import GpmeError
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from ..reports import tables as report
+from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..sampling import state_ranges
 from ..pinocchio.model import from_gpme
@@ -154,10 +156,6 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
 def _progress(enabled, total):
     if not enabled:
         return None
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return None
     return tqdm(total=total, desc="exudyn crosscheck", unit="scenario")
 
 
@@ -174,7 +172,6 @@ CONVENTIONS = (
 
 def _html(df, timings, wall, quick):
     """exudyn.html (crosscheck.reports.html.comparison_page)."""
-    from ..reports.html import comparison_page, section, table
     times = pd.DataFrame([{"scenario": n, "wall time (s)": round(w, 1)} for n, w in timings])
     intro = [f"{len(df)} comparisons over {len(timings)} scenarios; "
              f"{'quick' if quick else 'full'} run, {wall:.1f} s."]

@@ -28,7 +28,7 @@ No gpme constraint, kinematics, dynamics or integration code is called here.
 """
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import exudyn as exu
@@ -36,11 +36,16 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.errors import ConstraintError, SimulationError
+from gpme_core.integrate import suggest_rk4_step
 
+from .. import halving_gates, run_gates
+from ..compare import Tolerance, compare
 from ..convergence import FINEST, RefinementBudget, refine
 from ..engine_steps import engine_first_step
+from ..halving_gates import HalvedRuns
+from ..pinocchio.runs import exact_columns, run_step
 from ..run_gates import PHI_EVAL_ROUNDINGS, phi_floor, phi_term_scale
-from .constraints import ProgrammedConstraints
+from .constraints import CONSISTENT_TOL, ProgrammedConstraints
 from .model import add_tree, mass_and_forces, quiet_settings
 
 EPS = float(np.finfo(float).eps)
@@ -264,7 +269,6 @@ def halved_runs(scenario, t_end: float, columns_compared, dt: float = EXUDYN_DT,
     run_kw: passed to :func:`programmed_run` (model, constraint_specs, pin_system, ...).
     Returns (HalvedRuns with .refinement, info dict with wall times, halvings, dt, loose).
     """
-    from ..halving_gates import HalvedRuns
     log = log or (lambda msg: None)
     cons = [c for c in scenario.system.constraint_names if c in columns_compared]
     # judged: coordinates and velocities.  The index-3 multipliers of generalized-alpha
@@ -327,15 +331,12 @@ def run_t_end(scenario, quick: bool) -> float:
 
 
 def _info(scenario, quantity, case, text):
-    from ..compare import Tolerance, compare
     return compare(ENGINE, scenario.name, quantity, case, [0.0], [0.0],
                    Tolerance(np.inf, 0.0, f"information: {text}"), ["-"])
 
 
 def start_row(scenario, violation, case) -> dict:
     """Row: the start lies on the constraints (max|Phi(0)|, max|Phi_dot(0)|)."""
-    from ..compare import Tolerance, compare
-    from .constraints import CONSISTENT_TOL
     tol = Tolerance(CONSISTENT_TOL, 0.0,
                     "an index-3 solver projects an inconsistent start onto Phi = 0 in its "
                     "first step, which gpme's Baumgarte run does not do; the runs compare "
@@ -387,7 +388,6 @@ def first_step(scenario) -> float:
     rho_inf per step instead of following it, so its error only becomes O(h^2) once
     |lambda| h < 1: from 1e-3 s the UR10's CFRP forearm (lambda ~ 2e4 1/s) needed more
     halvings than any budget (observed order < 1 down to 6e-5 s)."""
-    from gpme_core.integrate import suggest_rk4_step
     return whole_steps(min(EXUDYN_DT, suggest_rk4_step(scenario.model, scenario.q0)))
 
 
@@ -404,10 +404,6 @@ def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: Option
     rows and the start row.  refined: gpme's RefinedRuns when already computed (same t_end,
     OUTPUT_DT).  run_kw: passed to Exudyn's runs (tests perturb the Exudyn side).
     A scenario without constraints gives one information row."""
-    from dataclasses import replace
-
-    from .. import halving_gates, run_gates
-    from ..pinocchio.runs import exact_columns, run_step
     log = log or (lambda msg: None)
     t_end = run_t_end(scenario, quick)
     if not scenario.system.constraint_names:

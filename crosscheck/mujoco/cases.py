@@ -11,8 +11,10 @@ import numpy as np
 
 from gpme_core.errors import ModelError
 from gpme_core.gpme import ProgrammedMotion
+from gpme_examples.crane import initial_state
 
 from ..compare import Tolerance
+from ..run_gates import FULL_RUN_T_END
 from . import mechanism as mech
 
 OUTPUT_DT = 1e-2           # s, spacing of the compared samples
@@ -55,7 +57,6 @@ class Plan:
     def t_end(self, scenario) -> float:
         """s, run length for ``scenario``: min(t_end, run_gates.FULL_RUN_T_END), or
         min(quick_t_end, QUICK_T_END)."""
-        from ..run_gates import FULL_RUN_T_END
         return min(scenario.quick_t_end, QUICK_T_END) if self.quick else \
             min(scenario.t_end, FULL_RUN_T_END)
 
@@ -99,6 +100,5 @@ def off_manifold_start(scenario):
     if not scenario.on_constraints:
         return np.array(scenario.q0), np.array(scenario.q_dot0)
     if scenario.model.name == "crane_rigid":
-        from gpme_examples.crane import initial_state
         return initial_state(scenario.model)
     return None

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.errors import GpmeError
-from gpme_core.integrate import simulate
+from gpme_core.integrate import simulate, suggest_rk4_step
 
 from .. import run_gates
 from ..crane_cases import crane_cases
@@ -73,7 +73,6 @@ def default_scenarios(quick: bool = False) -> list:
 def _dt(scenario):
     if scenario.dt is not None:
         return float(scenario.dt)
-    from gpme_core.integrate import suggest_rk4_step
     return suggest_rk4_step(scenario.model, scenario.q0)
 
 

@@ -1,5 +1,6 @@
 """Rows, plots (PNG files beside the page, each stored once) and the HTML page of the
 MuJoCo crosscheck (crosscheck/reports/templates/engine.html.j2)."""
+import mujoco
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -147,5 +148,4 @@ def write_report(out_dir, df, convergence, plots, quick, scenario_names):
 
 
 def _mujoco_version():
-    import mujoco
     return mujoco.__version__

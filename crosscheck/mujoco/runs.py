@@ -23,12 +23,14 @@ frozen over the stages (the drive still per stage), which must be worse.
 No gpme constraint, kinematics or dynamics code is called here.
 """
 import time
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 import pandas as pd
 
 from gpme_core.errors import SimulationError
+from gpme_core.gpme import ProgrammedMotion
 
 from ..run_gates import phi_term_scale
 from ..constraint_reference import evaluate_reference, reference_constraints
@@ -203,9 +205,6 @@ def free_run(scenario, t_end: float, dt: float, output_dt: float, model=None,
     """The scenario's model (or the variant ``model``, e.g. the crane with holding
     springs) without constraints, drives on, MuJoCo's RK4 at dt; same columns and attrs
     as :func:`programmed_run` without the constraint columns."""
-    from dataclasses import replace
-
-    from gpme_core.gpme import ProgrammedMotion
     model = model or scenario.model
     free = replace(scenario, model=model, constraints=(), system=ProgrammedMotion(model, ()))
     return programmed_run(free, t_end, dt, output_dt, mj_model or load(model, dt))

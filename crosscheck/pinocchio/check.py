@@ -44,6 +44,7 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 import pandas as pd
 import pinocchio as pin
+from tqdm import tqdm
 
 from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.gpme import ProgrammedMotion
@@ -57,10 +58,12 @@ from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import evaluate_reference, reference_constraints
 from ..reports import tables as report
+from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..states import FULL, QUICK, State, scenario_states
 from ..tolerances import TOLERANCES as TERM_TOLERANCES, solve_tolerances
 from .model import PinocchioSystem, from_gpme, from_original_urdf, from_urdf
+from .runs import run_section
 
 ENGINE = "pinocchio"
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -315,10 +318,6 @@ def default_scenarios(quick: bool = False) -> list:
 def _progress(enabled, total):
     if not enabled:
         return None
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return None
     return tqdm(total=total, desc="pinocchio crosscheck", unit="scenario")
 
 
@@ -380,7 +379,6 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
                 log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
                          int((~df["passed"]).sum()))
         if "runs" in sections:
-            from .runs import run_section
             try:
                 rows = run_section(scenario, quick, log.info)
             except GpmeError as exc:     # a run that cannot be made is a failed check
@@ -414,7 +412,6 @@ CONVENTIONS = (
 
 def _html(df, records, skipped, wall, quick):
     """pinocchio.html (crosscheck.reports.html.comparison_page)."""
-    from ..reports.html import comparison_page, section, table
     crba = ("pin.crba returned the whole symmetric matrix" if all(r.crba_whole for r in records)
             else "pin.crba filled only the upper triangle for some models; it was mirrored "
                  "before comparing")

@@ -22,6 +22,7 @@ built from Pinocchio's own crba M and rnea b.
 No gpme constraint, kinematics or dynamics code is called here.
 """
 import time
+from dataclasses import replace
 from typing import Optional
 
 import numpy as np
@@ -30,7 +31,7 @@ import pinocchio as pin
 
 from gpme_core.errors import SimulationError
 from gpme_core.gpme import ProgrammedMotion
-from gpme_core.integrate import DIVERGENCE_LIMIT, rk4_step_plan
+from gpme_core.integrate import DIVERGENCE_LIMIT, rk4_step_plan, suggest_rk4_step
 
 from .. import run_gates
 from ..compare import Tolerance, compare
@@ -163,7 +164,6 @@ def free_run(scenario, t_end: float, dt: float, output_dt: float, pin_system=Non
 
 
 def _with_model(scenario, model):
-    from dataclasses import replace
     return replace(scenario, model=model, constraints=(), system=ProgrammedMotion(model, ()))
 
 
@@ -209,7 +209,6 @@ def run_step(scenario) -> float:
     """s, the scenario's RK4 step (suggested from its q0 when the scenario has none)."""
     if scenario.dt is not None:
         return float(scenario.dt)
-    from gpme_core.integrate import suggest_rk4_step
     return suggest_rk4_step(scenario.model, scenario.q0)
 
 
