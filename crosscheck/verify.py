@@ -1,16 +1,17 @@
 """`gpme verify [--model FILE ...]`: each model's own run and every crosscheck in one command.
 
-Steps: gpme (each scenario's run and its checks; without --model the paper's two crane runs
-with the paper's figures), pinocchio (term by term and exactly realised runs), mujoco
-(terms, free and programmed runs), drake (terms of a MultibodyPlant from the URDF, free runs
-with Drake's integrator) and exudyn (programmed runs with the task as exact index-3
-constraints); the last two are optional extras (crosscheck.engines): when one is not
-installed its step is one information row saying what to install.  Writes reports/<run-id>/ (index.html, summary.json,
-summary.csv, models.json, checks/ with every step's comparison rows and tolerances.csv.gz
-(crosscheck.reports.rows), pinocchio.html, mujoco.html and their plots, plots/, runs/ or
-paper/ with the run histories and figures; reports/README.md) and points reports/latest at
-it.  The run is
-built in a hidden reports/.<run-id>.*.partial directory (removed if the run is
+Steps: gpme (each scenario's run and its checks; without --model the paper's two crane
+runs, gpme_io.scenario.crane_scenario, run the same way, plus the paper's figures),
+pinocchio (term by term and exactly realised runs), mujoco (terms, free and programmed
+runs), drake (terms of a MultibodyPlant from the URDF, free runs with Drake's integrator)
+and exudyn (programmed runs with the task as exact index-3 constraints); the last two are
+optional extras (crosscheck.engines): when one is not installed its step is one
+information row saying what to install.  Writes
+reports/<run-id>/ (index.html, summary.json, summary.csv, models.json, checks/ with every
+step's comparison rows and tolerances.csv.gz (crosscheck.reports.rows), pinocchio.html,
+mujoco.html and their plots, plots/, runs/ with the run histories and figures, paper/ with
+the paper's figures of the default crane runs; reports/README.md) and points reports/latest
+at it.  The run is built in a hidden reports/.<run-id>.*.partial directory (removed if the run is
 interrupted) and renamed into place only when complete, under a name no other run has
 taken (two runs started in the same second get <run-id> and <run-id>-2), and `latest` is
 replaced atomically, so an interrupted run leaves the previous report whole and `latest`
@@ -32,12 +33,9 @@ from pathlib import Path
 import pandas as pd
 
 from gpme_core.errors import GpmeError, OutputWriteError
-from gpme_examples import paper
 from gpme_io.budget import run_budget
-from gpme_io.paper_outputs import write_outputs
-from gpme_io.progress import progress_callback
+from gpme_io.example_outputs import write_example_outputs
 from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
-from gpme_io.scenario import crane_scenario
 
 from .accurate_step import run_accurately
 from .compare import CRASH_QUANTITY, Tolerance, compare
@@ -69,27 +67,10 @@ def default_scenarios(step, quick):
     return crane_cases(step, quick)
 
 
-def _paper_step(run_dir, quick, progress, max_wall_s=None):
-    """The paper's two crane runs, with the paper's figures (default run)."""
-    t_end = paper.QUICK_T_END if quick else paper.T_END
-    runs, rows, rfem_rows = {}, [], []
-    for case, n in (("rigid", 0), ("flexible", paper.DEFAULT_N_RFE)):
-        _say(f"  paper: {case} crane, {t_end:g} s of programmed motion (RK4, dt = "
-             f"{paper.DEFAULT_DT[case]:g} s)")
-        runs[case] = paper.run_case(case, t_end=t_end, progress=progress_callback(progress),
-                                    max_wall_s=max_wall_s)
-        _say(f"    wall time {runs[case].attrs['wall_time_s']:.1f} s")
-        rows += run_rows(crane_scenario(n), runs[case])
-        rfem_rows += rfem_reference.rfem_rows(crane_scenario(n))    # RFEM vs beam theory
-    write_outputs(runs, run_dir / "paper", compressed=True)
-    df = _with_rfem_rows(rows_frame(rows), rfem_rows)
-    write_rows(df, run_dir, "gpme")
-    return df, runs
-
-
 def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
-    """Each scenario's own gpme run: history, figures and the run checks."""
-    rows, rfem_rows = [], []
+    """Each scenario's own gpme run: history, figures and the run checks (runs/), and the
+    figures a built-in example adds (paper/: the paper's crane, gpme_io.example_outputs)."""
+    rows, rfem_rows, runs = [], [], []
     for scenario in scenarios:
         _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
         rfem_rows += rfem_reference.rfem_rows(scenario)     # RFEM vs beam theory
@@ -114,6 +95,8 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
         _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
         write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
         rows += scenario_rows
+        runs.append((scenario, df))
+    write_example_outputs(runs, run_dir / "paper")
     df = _with_rfem_rows(rows_frame(rows), rfem_rows)
     write_rows(df, run_dir, "gpme")
     return df
@@ -250,11 +233,8 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         t0 = time.perf_counter()
         try:
             if step == "gpme":
-                if scenarios is None:
-                    tables[step], _ = _paper_step(staging, quick, progress, max_wall_s)
-                else:
-                    tables[step] = _models_step(staging, scenarios, quick, progress,
-                                                max_wall_s)
+                chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
+                tables[step] = _models_step(staging, chosen, quick, progress, max_wall_s)
             elif step in OPTIONAL_STEPS and missing_message(step):
                 _say(f"[{step}] skipped: {missing_message(step)}")
                 tables[step] = _missing_engine_row(step, missing_message(step))
@@ -356,14 +336,7 @@ def estimate_runs(scenarios, quick, force):
     refuse (gpme_io.budget.BudgetError) one above the limits unless ``force``; an input problem
     found on the way (an unstable step in a model file, say) is raised here too."""
     _say("estimated cost of the gpme runs (the engine steps take about as long again):")
-    if scenarios is None:
-        t_end = paper.QUICK_T_END if quick else paper.T_END
-        for case in ("rigid", "flexible"):
-            _say(f"  paper, {case} crane, {t_end:g} s:")
-            run_budget(f"the paper's {case} crane", force)(
-                paper.estimate_case(case, t_end=t_end))
-        return
-    for scenario in scenarios:
+    for scenario in scenarios if scenarios is not None else default_scenarios("gpme", quick):
         _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
         run_budget(scenario.name, force)(estimate_scenario(scenario, quick=quick))
 

@@ -8,7 +8,7 @@ one line naming the file and the space left), 130 Ctrl-C, 143 SIGTERM, 129 SIGHU
 (gpme.signals: at every moment, compilation included).
 """
 # Imports inside functions: a command's own modules are imported by the function that runs
-# it (crosscheck's checks and engines, the paper's runs, the run service and its writers,
+# it (crosscheck's checks and engines, the run service and its writers,
 # progress bars, `gpme verify`, `gpme sweep`), so that the parser and the other commands do
 # not load them (pandas, Pinocchio, MuJoCo, Drake, Exudyn, Dask, matplotlib).  Not in the
 # docstring above, which is `gpme --help`'s text.
@@ -28,6 +28,7 @@ from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Termin
 from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.methods import FIXED_STEP_METHODS, METHODS
 from gpme_core.rfem import MAX_SEGMENTS
+from gpme_examples import paper
 from gpme_io.budget import MAX_CSV_BYTES, MAX_STEP_HALVINGS, MAX_WALL_S, run_budget, wall_limit
 from gpme_io.modelfile import load_model_files
 from gpme_io.out_lock import exclusive_output, output_dir_problem
@@ -110,49 +111,26 @@ def checks_summary(rows):
     return f"FAIL: checks: {counts}: {named}{more}"
 
 
-def _simulate_paper(args):
-    """The paper's two crane runs with the paper's figures (no --model), each judged by the
-    same checks as a model file's run (crosscheck.run_checks)."""
-    from gpme_examples import paper
-    from gpme_io.paper_outputs import write_outputs
-    from gpme_io.progress import progress_callback
-    cases = ["rigid", "flexible"] if args.case == "both" else [args.case]
-    t_end = args.t_end or (paper.QUICK_T_END if args.quick else paper.T_END)
+def _paper_scenarios(args):
+    """The paper's crane runs `gpme simulate` makes without --model: the cases of --case
+    (the flexible arm with --n-rfe segments, default the paper's), started on the
+    constraints with --on-manifold and in the arm's gravity sag with --static-arm
+    (gpme_io.scenario.crane_scenario)."""
     n_rfe = paper.DEFAULT_N_RFE if args.n_rfe is None else args.n_rfe
-    method = args.method or "RK4"
-    runs, rows = {}, []
-    for case in cases:
-        label = case if case == "rigid" else f"flexible (n_rfe={n_rfe})"
-        n = 0 if case == "rigid" else n_rfe
-        scenario = crane_scenario(n, on_constraints=args.on_manifold,
-                                  static_arm=args.static_arm)
-        settings = dict(n_rfe=n_rfe, t_end=t_end, method=method, on_manifold=args.on_manifold,
-                        static_arm=args.static_arm)
-
-        def run(dt, case=case, label=label, settings=settings):
-            df = paper.run_case(case, dt=args.dt if dt is None else dt,
-                                progress=progress_callback(not args.no_progress),
-                                before_run=run_budget(label, args.force),
-                                max_wall_s=wall_limit(args.force), **settings)
-            print(f"  wall time {df.attrs['wall_time_s']:.1f} s", flush=True)
-            return df
-
-        def estimate(dt, case=case, settings=settings):
-            return paper.estimate_case(case, dt=dt, **settings)
-
-        print(f"simulating {label}, t_end = {t_end:g} s ...", flush=True)
-        start = "the paper's step" if n <= paper.DEFAULT_N_RFE else "half the stability limit"
-        runs[case], case_rows = _run_checked(
-            label, run, partial(simulate_rows, scenario), estimate,
-            accurate=method == "RK4" and args.dt is None, force=args.force, start=start)
-        rows += case_rows
-    return write_outputs(runs, args.out), rows
+    cases = list(paper.CASES) if args.case == "both" else [args.case]
+    return [crane_scenario(0 if case == "rigid" else n_rfe, on_constraints=args.on_manifold,
+                           static_arm=args.static_arm) for case in cases]
 
 
-def _simulate_models(args):
+def _simulate_scenarios(args, scenarios):
+    """Run each scenario (its step chosen by crosscheck.accurate_step unless --dt or another
+    method is given), print its checks and write its history and figures, and the figures a
+    built-in example adds (the paper's, gpme_io.example_outputs); returns ({file: path},
+    check rows)."""
+    from gpme_io.example_outputs import write_example_outputs
     from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
-    paths, rows = {}, []
-    for scenario in load_model_files(args.model):
+    paths, rows, runs = {}, [], []
+    for scenario in scenarios:
         t_end = args.t_end if args.t_end is not None else scenario.t_run(args.quick)
         print(f"simulating {scenario.name}: {scenario.model.n_coordinates} coordinates, "
               f"{scenario.system.n_constraints} constraints, t_end = {t_end:g} s ...", flush=True)
@@ -172,9 +150,12 @@ def _simulate_models(args):
         df, model_rows = _run_checked(
             scenario.name, run, partial(simulate_rows, scenario), estimate,
             accurate=method == "RK4" and args.dt is None, force=args.force,
-            start="the model's step")
+            start=("the paper's step" if scenario.example == paper.EXAMPLE and
+                   scenario.dt in paper.DEFAULT_DT.values() else "the model's step"))
         rows += model_rows
+        runs.append((scenario, df))
         paths.update(write_run_outputs(scenario, df, args.out))
+    paths.update(write_example_outputs(runs, args.out))
     return paths, rows
 
 
@@ -216,7 +197,8 @@ def _simulate(args):
               "(its steps follow its error control)", flush=True)
     try:
         with exclusive_output(args.out):
-            paths, rows = _simulate_models(args) if args.model else _simulate_paper(args)
+            scenarios = load_model_files(args.model) if args.model else _paper_scenarios(args)
+            paths, rows = _simulate_scenarios(args, scenarios)
     except OutputWriteError:
         raise                        # exit 74, gpme.cli.main
     except GpmeError as exc:

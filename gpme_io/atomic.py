@@ -70,8 +70,7 @@ def atomic_write_text(path, text):
 
 
 # Significant digits of the run histories in a verify report (compressed=True of
-# gpme_io.paper_outputs.write_outputs and gpme_io.runs.write_run_outputs; `gpme simulate` keeps
-# full precision).  The rounding, at most 5e-14 relative, is below what halving the step
+# gpme_io.runs.write_run_outputs; `gpme simulate` keeps full precision).  The rounding, at most 5e-14 relative, is below what halving the step
 # changes in every column of the paper's 10 s runs but three that agree to round-off
 # (end-effector height, column angle, drive work; 2e-15..5e-14): measured
 # 5e-15..5e-12 (rigid) and 2e-15..2e-5 (flexible); reports/README.md, "Precision of the run

@@ -2,7 +2,7 @@
 
 Each function takes run DataFrames from gpme_core.integrate.simulate keyed by a case
 label and returns a matplotlib Figure (object API: no pyplot state, no backend is
-switched); gpme_io.paper_outputs saves them.  Figures of any scenario's run are
+switched); gpme_io.example_outputs saves them.  Figures of any scenario's run are
 gpme_io.figures.
 """
 import numpy as np

@@ -2,7 +2,7 @@
 bar on a terminal; elsewhere (CI logs, files) at most one line per tenth of the run and per
 LOG_LINE_SECONDS, so a log never gets hundreds of progress lines (a short run: none).  The
 first call's numba compilation is announced on both.  `gpme simulate` and `gpme verify`
-pass it to the runs (gpme_io.runs.simulate_scenario, gpme_examples.paper.run_case)."""
+pass it to the runs (gpme_io.runs.simulate_scenario)."""
 import sys
 
 from tqdm import tqdm

@@ -34,6 +34,8 @@ def _run_settings(scenario, t_end, dt, method, quick, output_dt):
     out_dt = output_dt or scenario.output_dt
     if method == RK4:
         step = resolved_step(scenario, dt)
+        if dt is None:
+            step = min(step, t_end)     # the scenario's step, not one the caller gave
     elif dt is None and method == RADAU_IIA == scenario.integrator:
         step = scenario.dt           # the model file's RadauIIA step (None: its default)
     else:

@@ -22,7 +22,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.methods import METHODS
 from gpme_core.model import Model
 from gpme_core.stability import suggest_rk4_step
-from gpme_examples import crane
+from gpme_examples import crane, paper
 
 INTEGRATORS = METHODS            # gpme_core.methods
 
@@ -86,6 +86,9 @@ class Scenario:
     on_constraints: whether q0, q_dot0 were placed on the constraints
     yield_strengths: {flexible link name: Pa}, the links whose elasticity can be judged
                   (gpme_core.elastic_loads)
+    example     : the built-in example the scenario is a run of (gpme_examples.paper.EXAMPLE
+                  for the paper's crane runs: their figures are added by
+                  gpme_io.example_outputs), None for a model file's
     """
 
     name: str
@@ -108,6 +111,7 @@ class Scenario:
     on_constraints: bool = False
     yield_strengths: Mapping[str, float] = field(default_factory=dict)
     engine_steps: Mapping[str, EngineStep] = field(default_factory=dict)
+    example: Optional[str] = None
 
     def __post_init__(self):
         for name in ("q0", "q_dot0"):
@@ -155,5 +159,6 @@ def crane_scenario(n_rfe=0, on_constraints=False, static_arm=False):
                     q0=q0, q_dot0=qd0, t_end=crane.T_END, quick_t_end=crane.QUICK_T_END,
                     integrator="RK4",
                     dt=dt, output_dt=1e-3, on_constraints=on_constraints,
+                    example=paper.EXAMPLE,
                     yield_strengths={f.name: params.arm_yield_strength
                                      for f in system.model.flexible_links})

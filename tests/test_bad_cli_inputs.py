@@ -353,7 +353,7 @@ def test_crane_run_shorter_than_its_default_step(tmp_path, capsys):
     code, err = _run(["simulate", "--case", "rigid", "--t-end", "1e-5", "--out",
                       str(tmp_path), "--no-progress"], capsys)
     assert code == 0, err
-    assert (tmp_path / "rigid.csv").is_file()
+    assert (tmp_path / "crane_rigid.csv").is_file()
 
 
 def test_crosscheck_mujoco_refuses_names_mujoco_cannot_take_before_any_work(tmp_path, capsys):

@@ -36,10 +36,11 @@ def test_simulate_command_writes_csv_and_figures(tmp_path):
     code = main(["simulate", "--t-end", "0.2", "--n-rfe", "1", "--dt", "1e-4", "--out", str(out),
                  "--no-progress"])
     assert code == 0
-    for name in ("rigid.csv", "flexible.csv", "fig2_joint_coordinates.png",
+    for name in ("crane_rigid.csv", "crane_flexible_n1.csv", "crane_rigid_coordinates.png",
+                 "crane_flexible_n1_constraints.png", "fig2_joint_coordinates.png",
                  "fig3_end_effector.png", "constraint_violation.png"):
         assert (out / name).stat().st_size > 0, name
-    df = pd.read_csv(out / "flexible.csv")
+    df = pd.read_csv(out / "crane_flexible_n1.csv")
     for col in ("t", "z1", "psi2", "psi3", "z4", "psi_arm_1", "theta_arm_1", "phi_arm_1",
                 "z4_dot", "Phi_1", "Phi_2", "Phi_1_dot", "tau_psi2", "E_kin", "E_pot",
                 "W_dissipated", "x_E", "y_E", "z_E"):
@@ -66,5 +67,6 @@ def test_simulate_command_static_arm_starts_in_the_sag(tmp_path):
     out = tmp_path / "static"
     assert main(["simulate", "--case", "flexible", "--n-rfe", "1", "--t-end", "0.01", "--dt",
                  "1e-4", "--static-arm", "--on-manifold", "--out", str(out), "--no-progress"]) == 0
-    df = pd.read_csv(out / "flexible.csv")
+    df = pd.read_csv(out / "crane_flexible_n1.csv")
+    assert not (out / "crane_rigid.csv").exists()      # --case flexible: one run
     assert abs(df.psi_arm_1.iloc[0]) > 1e-4      # bent at t = 0, not straight

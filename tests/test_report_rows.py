@@ -297,22 +297,31 @@ def test_a_model_run_history_reads_back(tmp_path, monkeypatch, compressed):
         assert paths[name].read_bytes() == first      # no time stamp: same rows, same bytes
 
 
-@pytest.mark.parametrize("compressed", [False, True], ids=["simulate-plain", "verify-gzip"])
-def test_the_paper_histories_read_back(tmp_path, monkeypatch, compressed):
-    from gpme_io.atomic import HISTORY_DIGITS
-    from gpme_examples import paper
+def test_the_paper_figures_are_added_for_the_crane_runs_only(tmp_path, monkeypatch):
+    """The paper's crane runs like any model (histories by write_run_outputs, above); the
+    hook adds the paper's three figures when, and only when, a run is the crane's, with the
+    runs named as the paper names them."""
     from gpme_io import paper_figures
-    from gpme_io.paper_outputs import write_outputs
+    from gpme_io.example_outputs import PAPER_FIGURES, write_example_outputs
+    from gpme_io.modelfile import load_model_file
+    from gpme_io.runs import simulate_scenario
+    from gpme_io.scenario import crane_scenario
+    drawn = []
+
+    def record(runs, *args):
+        drawn.append(list(runs))
+        return _tiny_figure()
     for name in ("joint_coordinates", "end_effector", "constraint_violation"):
-        monkeypatch.setattr(paper_figures, name, _tiny_figure)
-    runs = {case: paper.run_case(case, t_end=0.01) for case in ("rigid", "flexible")}
-    paths = write_outputs(runs, tmp_path, compressed=compressed)
-    for case, df in runs.items():
-        back = pd.read_csv(paths[f"{case}.csv.gz" if compressed else f"{case}.csv"])
-        assert list(back.columns) == list(df.columns) and len(back) == len(df)
-        _same(back, _rounded(df, HISTORY_DIGITS) if compressed else df)
-    assert sorted(p.name for p in tmp_path.glob("*.csv*")) == sorted(
-        f"{c}.csv.gz" if compressed else f"{c}.csv" for c in runs)
+        monkeypatch.setattr(paper_figures, name, record)
+    crane = [(s, simulate_scenario(s, t_end=0.01)) for s in (crane_scenario(3),
+                                                             crane_scenario(0))]
+    other = load_model_file(REPO / "tests" / "data" / "runs" / "point_pendulum.toml")
+    assert write_example_outputs([(other, None)], tmp_path / "none") == {}
+    assert not (tmp_path / "none").exists() and not drawn
+    paths = write_example_outputs(crane + [(other, None)], tmp_path)
+    assert sorted(paths) == sorted(name for name, _, _ in PAPER_FIGURES)
+    assert all(p.is_file() for p in paths.values())
+    assert drawn == [["rigid", "flexible"]] * len(PAPER_FIGURES)
 
 
 # ---- figures: a palette where it changes nothing visible, lossless elsewhere

@@ -34,8 +34,9 @@ def test_run_directory_and_latest(report):
     assert (root / "latest").resolve() == run_dir.resolve()
     for name in ("index.html", "summary.json", "summary.csv", "checks/index.csv",
                  "tolerances.csv.gz", "checks/gpme/columns.csv", "models.json",
-                 "paper/rigid.csv.gz", "paper/flexible.csv.gz",
-                 "paper/fig2_joint_coordinates.png"):
+                 "runs/crane_rigid.csv.gz", "runs/crane_flexible_n3.csv.gz",
+                 "runs/crane_rigid_constraints.png", "paper/fig2_joint_coordinates.png",
+                 "paper/fig3_end_effector.png", "paper/constraint_violation.png"):
         assert (run_dir / name).is_file(), name
     data = json.loads((run_dir / "summary.json").read_text())
     assert len(data["checks"]) == len(summary)
@@ -44,7 +45,7 @@ def test_run_directory_and_latest(report):
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]
     from crosscheck.reports.rows import read_rows
     back = read_rows(run_dir, "gpme")
-    assert pd.read_csv(run_dir / "paper" / "rigid.csv.gz")["t"].iloc[-1] == paper.QUICK_T_END
+    assert pd.read_csv(run_dir / "runs" / "crane_rigid.csv.gz")["t"].iloc[-1] == paper.QUICK_T_END
     run_rows = back[back["section"] == "run"]
     assert set(run_rows["quantity"]) == {"|Phi_1| after transient", "|Phi_2| after transient",
                                          "energy balance",
@@ -76,7 +77,7 @@ def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
     root = report[0]
     rows = report[3]
     # the directory logic is under test, not the runs: a step that returns the first run's rows
-    monkeypatch.setattr(verify, "_paper_step", lambda *args, **kwargs: (rows, None))
+    monkeypatch.setattr(verify, "_models_step", lambda *args, **kwargs: rows)
     first, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     second, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     assert first != second and first.name == "same" and second.name == "same-2"
@@ -127,7 +128,7 @@ def test_first_run_says_there_is_nothing_to_compare(report):
 
 def test_unreadable_previous_report_is_one_line_not_a_crash(report, monkeypatch, tmp_path):
     rows = report[3]
-    monkeypatch.setattr(verify, "_paper_step", lambda *args, **kwargs: (rows, None))
+    monkeypatch.setattr(verify, "_models_step", lambda *args, **kwargs: rows)
     bad = tmp_path / "old-run"
     bad.mkdir()
     (bad / "summary.json").write_text('{"run": {"run_id": "old"}, "checks": [')

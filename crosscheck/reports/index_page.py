@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 from markupsafe import Markup
 
+from gpme_io.example_outputs import PAPER_FIGURES
 from gpme_io.file_names import file_stem
 
 from ..compare import CRASH_QUANTITY, FAIL, INFO, PASS
@@ -24,11 +25,6 @@ from .rows import CHECKS_DIR, TOLERANCES_FILE, check_id, slice_path
 from .run_diff import diff_lines, headline
 from .tables import atomic_write_text, checks_worst_first
 
-PAPER_FIGURES = (("fig2_joint_coordinates.png", "Joint coordinates against time, rigid and "
-                  "flexible crane (paper Fig. 2)"),
-                 ("fig3_end_effector.png", "End-effector path over the target ellipse and "
-                  "z_E(t) over z_a(t) (paper Fig. 3)"),
-                 ("constraint_violation.png", "|Phi_1| and |Phi_2| against time (log scale)"))
 ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
                  "mujoco": "MuJoCo (terms and full runs)",
                  "drake": "Drake (terms of a MultibodyPlant from the URDF, free runs)",
@@ -52,7 +48,7 @@ FILE_NOTES = {
     "drake.html": "the Drake crosscheck's own page",
     "exudyn.html": "the Exudyn crosscheck's own page",
     "urdf": "the URDFs written for Pinocchio (drake/: those Drake read)",
-    "paper": "the paper's runs: histories and figures",
+    "paper": "the paper's figures of the crane's runs (their histories are in runs/)",
     "runs": "each model's run: histories and figures",
 }
 
@@ -129,8 +125,7 @@ def _engine_plot(run_dir, engine, section, model, spreads):
     there is one, else the spread plot of its group."""
     candidates = [f"{engine}_{section}_{file_stem(model)}.png"]
     if engine == "gpme":
-        candidates += [f"runs/{file_stem(model)}_constraints.png",
-                       "paper/constraint_violation.png"]
+        candidates.append(f"runs/{file_stem(model)}_constraints.png")
     for c in candidates:
         if (run_dir / c).is_file():
             return c
@@ -185,25 +180,24 @@ def _count_text(counts):
 
 
 def _runs_section(run_dir):
-    """The run histories and figures: paper/ (the default crane run) or runs/."""
+    """The run histories and figures (runs/), after the paper's figures when the run had the
+    paper's crane (paper/, gpme_io.example_outputs)."""
     paper, runs = run_dir / "paper", run_dir / "runs"
+    if not runs.is_dir():
+        return None
+    figures = [{"src": f"paper/{name}", "caption": caption}
+               for name, caption, _ in PAPER_FIGURES if (paper / name).is_file()]
+    figures += [{"src": f"runs/{p.name}", "caption": p.stem.replace("_", " ")}
+                for p in sorted(runs.glob("*.png"))]
+    text = "Histories and figures of the gpme runs (columns: reports/README.md)."
     if paper.is_dir():
-        figures = [{"src": f"paper/{name}", "caption": caption}
-                   for name, caption in PAPER_FIGURES if (paper / name).is_file()]
-        return {"title": "The paper's simulations",
-                "text": ("Crane of docs/crane.md: rigid arm and RFEM-flexible arm, flexible "
-                         "support, drive torque ramp, programmed ellipse and height."),
-                "files": [{"href": f"paper/{p.name}", "note": "run history (columns: "
-                           "reports/README.md)"} for p in sorted(paper.glob("*.csv*"))],
-                "figures": figures}
-    if runs.is_dir():
-        return {"title": "Each model's own run",
-                "text": "Histories and figures of the gpme runs (columns: reports/README.md).",
-                "files": [{"href": f"runs/{p.name}", "note": ""} for p in
-                          sorted(runs.iterdir()) if p.suffix != ".png"],
-                "figures": [{"src": f"runs/{p.name}", "caption": p.stem.replace("_", " ")}
-                            for p in sorted(runs.glob("*.png"))]}
-    return None
+        text += (" The paper's crane (docs/crane.md): rigid arm and RFEM-flexible arm, "
+                 "flexible support, drive torque ramp, programmed ellipse and height; the "
+                 "paper's figures first.")
+    return {"title": "Each model's own run", "text": text,
+            "files": [{"href": f"runs/{p.name}", "note": ""} for p in sorted(runs.iterdir())
+                      if p.suffix != ".png"],
+            "figures": figures}
 
 
 def _key_plots(run_dir, summary, spreads, runs):
