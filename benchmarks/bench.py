@@ -44,7 +44,8 @@ from gpme_core.compiled import for_system, single_threaded_blas
 from gpme_core.constraints import SympyPointConstraint
 from gpme_core.errors import GpmeError
 from gpme_core.gpme import ProgrammedMotion
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.integrate import simulate
+from gpme_core.stability import suggest_rk4_step
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 
 from .engines import (PinocchioConstrained, mujoco_forward_setup, mujoco_run,

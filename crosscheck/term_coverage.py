@@ -43,11 +43,12 @@ from numpy.typing import NDArray
 
 from gpme_io.atomic import atomic_write_text
 from gpme_io.modelfile import load_model_file
+from gpme_io.runs import resolved_step
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                                    SympyPointConstraint, evaluate_constraints)
 from gpme_core.dynamics import dynamics_terms
 from gpme_core.errors import ModelError
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.integrate import simulate
 from gpme_core.kinematics import point_kinematics
 from gpme_core.model import PRISMATIC, REVOLUTE
 from gpme_core.rfem import BeamSection
@@ -347,12 +348,10 @@ def constraint_kind(spec) -> str:
 def run_example(scenario, t_end: Optional[float] = None, compiled: bool = True):
     """History DataFrame of the scenario's quick run (or its first ``t_end`` s) with gpme,
     run as gpme_io.runs.simulate_scenario runs it: the scenario's integrator, step (RK4:
-    the scenario's, else suggest_rk4_step at q0) and output spacing.  compiled=False runs
+    gpme_io.runs.resolved_step) and output spacing.  compiled=False runs
     RK4 on the Python reference path (no numba compilation; same motion to round-off)."""
     t_run = scenario.quick_t_end if t_end is None else min(float(t_end), scenario.quick_t_end)
-    dt = scenario.dt
-    if scenario.integrator == "RK4" and dt is None:
-        dt = suggest_rk4_step(scenario.model, scenario.q0)
+    dt = resolved_step(scenario) if scenario.integrator == "RK4" else scenario.dt
     return simulate(scenario.system, t_run, scenario.q0, scenario.q_dot0, dt=dt,
                     method=scenario.integrator, output_dt=min(scenario.output_dt, t_run),
                     compiled=compiled)

@@ -34,10 +34,7 @@ from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_ME
 from .progress import Progress
 from .run_cost import estimate_run, time_evaluation
 from .singular_approach import approach
-# rk4_stability_step, springs_jacobian and suggest_rk4_step are gpme_core.stability's;
-# callers (tests, crosscheck, benchmarks) import them from here too
-from .stability import (STEP_SAFETY, rk4_limit, rk4_stability_step, springs_jacobian,
-                        suggest_rk4_step, unstable_step_message)
+from .stability import rk4_limit, safe_step, unstable_step_message
 
 log = logging.getLogger("gpme.integrate")
 
@@ -509,7 +506,7 @@ def _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
         limit, mode = rk4_limit(start_system, 0.0, q0, q_dot0)
     if method == "RK4":
         if dt is None:
-            dt = min(STEP_SAFETY * limit, output_dt, t_end)
+            dt = safe_step(limit, min(output_dt, t_end))
         elif check_step and dt > limit:
             raise UnstableStepError(unstable_step_message(dt, limit, mode,
                                                           "at the start (t = 0)"))

@@ -139,8 +139,30 @@ def springs_jacobian(model, q):
     return a
 
 
+def safe_step(limit, cap=np.inf, safety=STEP_SAFETY):
+    """s: the RK4 step taken for a stability limit ``limit`` (s): ``safety`` x limit, at
+    most ``cap`` (an output spacing, a run's length, an engine's largest step)."""
+    return float(min(safety * limit, cap))
+
+
+def rk4_step(system, q, q_dot=None, cap=np.inf, how="springs", t=0.0):
+    """s: the RK4 step gpme takes where none is given: STEP_SAFETY x the stability limit
+    (rk4_limit) of ``system`` (gpme_core.gpme.ProgrammedMotion) at (t, q, q_dot), at most
+    ``cap``.  The one step policy of the project: `simulate` without dt (``how`` None: the
+    linearised run up to MAX_LINEARISED coordinates), a model file without [run] dt, a
+    scenario built in code without one, the crane's finer arms, the sweep's points and the
+    engines' fallbacks (``how`` "springs": springs, dampers, inertia and the Baumgarte
+    rates, cheap at any size).
+    q, q_dot : (n,) initial state (q_dot default zeros: the springs estimate ignores it)."""
+    q = np.asarray(q, dtype=float)
+    q_dot = np.zeros_like(q) if q_dot is None else np.asarray(q_dot, dtype=float)
+    limit, _ = rk4_limit(system, t, q, q_dot, how)
+    return safe_step(limit, cap)
+
+
 def suggest_rk4_step(model, q, safety=0.5):
-    """s: a stable RK4 step for small oscillations about q (springs, dampers, inertia).
+    """s: a stable RK4 step for small oscillations of a bare model (no constraints) about q
+    (springs, dampers, inertia); the step of a run is :func:`rk4_step`'s.
 
     Eigenvalues of the linearised first-order system [[0, I], [-M^-1 K, -M^-1 D]] at q
     (gravity stiffness and constraints neglected: they are slow here); returns ``safety``
@@ -149,7 +171,7 @@ def suggest_rk4_step(model, q, safety=0.5):
     """
     a = springs_jacobian(model, q)
     steps = [rk4_stability_step(lam) for lam in np.linalg.eigvals(a)]
-    return safety * float(min(steps))
+    return safe_step(min(steps), safety=safety)
 
 
 def _linearised_jacobian(system, t, q, q_dot):

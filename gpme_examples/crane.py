@@ -45,7 +45,7 @@ T_END = 10.0
 QUICK_T_END = 2.0
 # RK4 steps: the rigid crane's fastest motion is the 5 Hz support and the 20 1/s
 # Baumgarte rate; the flexible arm's RFEM torsion modes (about 5 kHz at n = 3) need
-# dt below 8e-5 s (gpme_core.stability.suggest_rk4_step); 5e-5 s keeps a 40 % margin.
+# dt below 8e-5 s (gpme_core.stability.rk4_step); 5e-5 s keeps a 40 % margin.
 DEFAULT_DT = {"rigid": 1e-4, "flexible": 5e-5}
 
 

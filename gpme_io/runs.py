@@ -6,7 +6,8 @@ from pathlib import Path
 from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
-from gpme_core.integrate import estimate_simulation, simulate, suggest_rk4_step
+from gpme_core.integrate import estimate_simulation, simulate
+from gpme_core.stability import rk4_step
 from gpme_core.methods import METHODS, RADAU_IIA, RK4
 from gpme_io.file_names import named_path
 from gpme_io.progress import progress_callback
@@ -16,10 +17,11 @@ from . import figures
 
 def resolved_step(scenario, dt=None):
     """s, the RK4 step of a run: ``dt`` if given, else the scenario's, else
-    suggest_rk4_step at the scenario's initial state (stable for its stiffest mode)."""
+    gpme_core.stability.rk4_step at the scenario's initial state (half the stability limit
+    of its stiffest mode, at most its output spacing)."""
     step = dt if dt is not None else scenario.dt
     if step is None:
-        step = suggest_rk4_step(scenario.model, scenario.q0)
+        step = rk4_step(scenario.system, scenario.q0, cap=scenario.output_dt)
     if not (step > 0 and step < float("inf")):
         raise ModelError(f"RK4 step must be positive and finite (s), got {step!r}")
     return float(step)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.methods import METHODS
 from gpme_core.model import Model
-from gpme_core.stability import suggest_rk4_step
+from gpme_core.stability import rk4_step
 from gpme_examples import crane, paper
 
 INTEGRATORS = METHODS            # gpme_core.methods
@@ -73,7 +73,7 @@ class Scenario:
     t_end       : s, length of the full run
     quick_t_end : s, length of the CI-sized run (``--quick``)
     integrator  : one of INTEGRATORS
-    dt          : s, RK4 step (None: gpme_core.integrate.suggest_rk4_step at q0)
+    dt          : s, RK4 step (None: gpme_core.stability.rk4_step at q0, gpme_io.runs.resolved_step)
     output_dt   : s, spacing of the recorded samples
     source      : the model file (None when built in code)
     urdf        : the user's URDF (None for models built in code, e.g. the crane)
@@ -153,7 +153,7 @@ def crane_scenario(n_rfe=0, on_constraints=False, static_arm=False):
     dt = crane.DEFAULT_DT[case]
     if n_rfe > crane.DEFAULT_N_RFE:
         # the paper's step is set for n_rfe = 3; finer arms have stiffer torsion modes
-        dt = min(dt, suggest_rk4_step(system.model, q0))
+        dt = rk4_step(system, q0, cap=dt)
     return Scenario(name=system.model.name, model=system.model,
                     constraints=tuple(crane.crane_constraints(params)), system=system,
                     q0=q0, q_dot0=qd0, t_end=crane.T_END, quick_t_end=crane.QUICK_T_END,

@@ -32,7 +32,7 @@ def add_arguments(parser):
     parser.add_argument("--output-dt", type=float, default=None,
                         help="s, recorded row spacing (default 2e-3)")
     parser.add_argument("--dt", type=float, default=None,
-                        help="s, RK4 step (default: per point from suggest_rk4_step)")
+                        help="s, RK4 step (default: per point from gpme_core.stability.rk4_step)")
     parser.add_argument("--min-frequency", type=float, default=None,
                         help="Hz, lower edge of the vibration band (default 2)")
     parser.add_argument("--phi-tolerance", type=float, default=None,

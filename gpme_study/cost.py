@@ -37,7 +37,7 @@ import numpy as np
 from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate
 from gpme_core.run_cost import format_bytes, format_seconds, kernels_compiled
-from gpme_core.stability import suggest_rk4_step
+from gpme_core import stability
 from gpme_examples.crane import crane_system, initial_state
 from gpme_io.runs import resolved_step
 
@@ -218,7 +218,7 @@ def model_point_plans(document, point, settings, sampler):
         if method == "RK4":
             dt = resolved_step(scenario)
         else:                    # the warm-up's span: as many stable RK4 steps
-            dt = suggest_rk4_step(scenario.model, q0)
+            dt = stability.rk4_step(scenario.system, q0)
         key = ("model", scenario.model.n_coordinates, method)
         cost = sampler.cost(key, system, q0, q_dot0, dt, method)
     except POINT_FAILURES as exc:    # the point stops at its start, recorded then

@@ -15,7 +15,8 @@ import numpy as np
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_core.errors import ConstraintError, ModelError, SimulationError
 from gpme_core.elastic_loads import elastic_peaks
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core import stability
+from gpme_core.integrate import simulate
 
 from . import metrics as mx
 from .spec import RunSettings, crane_changes
@@ -27,7 +28,7 @@ METRICS_VERSION = 4
 # relative; measured: end-effector positions differ by 1.1e-9 m from dt = 3.3e-4 s over 3 s
 # (A = 0.3 m, T = 1.5 s), five decades below the flexibility deviations being measured.
 RIGID_DT_MAX = 1e-3
-# s, longest RK4 step of the flexible crane (its step normally comes from suggest_rk4_step)
+# s, longest RK4 step of the flexible crane (its step normally comes from gpme_core.stability.rk4_step)
 FLEXIBLE_DT_MAX = 5e-4
 STATUSES = ("ok", "infeasible", "diverged", "invalid", "error")
 _STATUS_OF = ((ConstraintError, "infeasible"), (SimulationError, "diverged"),
@@ -68,14 +69,14 @@ def point_key(point, settings):
 
 
 def rk4_step(system, q0, settings):
-    """s: the RK4 step of one run: settings.dt if > 0, else suggest_rk4_step capped at
+    """s: the RK4 step of one run: settings.dt if > 0, else gpme_core.stability.rk4_step capped at
     RIGID_DT_MAX or FLEXIBLE_DT_MAX; shortened so that settings.output_dt is a whole number
     of steps (the rigid and the flexible run of a point then record at the same times)."""
     if settings.dt > 0:
         h = settings.dt
     else:
         cap = FLEXIBLE_DT_MAX if mx.flexible_columns(system.model) else RIGID_DT_MAX
-        h = min(suggest_rk4_step(system.model, q0), cap)
+        h = stability.rk4_step(system, q0, cap=cap)
     return settings.output_dt / math.ceil(settings.output_dt / h - 1e-9)
 
 

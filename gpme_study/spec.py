@@ -17,7 +17,7 @@ is validated once, here: :class:`SweepSpecError` lists every problem found.  Sch
     n_rfe = 1                      # RFEM segments when n_rfe is not swept (0 = rigid arm only)
     transient = 1.0                # s, start of the window of the |Phi| and spectrum metrics
     output_dt = 2e-3               # s, spacing of the recorded rows (Nyquist 250 Hz)
-    dt = 0                         # s, RK4 step; 0 = per point from suggest_rk4_step
+    dt = 0                         # s, RK4 step; 0 = per point from gpme_core.stability.rk4_step
     min_frequency_hz = 2.0         # Hz, lower edge of the vibration-frequency search
     phi_tolerance = 1e-3           # largest |Phi| after the transient that counts as met
     [limits]                       # safe region: metric name = largest allowed value

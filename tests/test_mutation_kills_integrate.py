@@ -11,7 +11,8 @@ from gpme_core.constraints import CoordinateProgramme
 from gpme_core.errors import ConstraintError, ModelError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import cuboid
-from gpme_core.integrate import rk4_stability_step, rk4_step_plan, simulate, suggest_rk4_step
+from gpme_core.integrate import rk4_step_plan, simulate
+from gpme_core.stability import rk4_stability_step, suggest_rk4_step
 from gpme_core.model import PRISMATIC, ChainBuilder
 from gpme_core.time_functions import Sine
 

@@ -15,7 +15,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import cuboid
 from gpme_core.integrate import simulate
 from gpme_core.model import PRISMATIC, ChainBuilder
-from gpme_core.stability import STEP_SAFETY, linear_modes, rk4_limit, round_down
+from gpme_core.stability import STEP_SAFETY, linear_modes, rk4_limit, rk4_step, round_down
 from gpme_core.time_functions import Sine
 
 pytestmark = pytest.mark.both_computation_paths
@@ -68,6 +68,21 @@ def test_baumgarte_mode_is_named_as_constraint_violation():
     assert abs(mode.eigenvalue.imag) == pytest.approx(300.0, rel=1e-6)
     assert "constraint violation" in mode.coordinates[0]
     assert limit == pytest.approx(SQRT8 / 300.0, rel=1e-6)
+
+
+def test_the_one_step_policy_is_half_the_closed_form_limit_at_most_the_cap():
+    """gpme_core.stability.rk4_step, the step every run takes where none is given: half of
+    the stiffest mode's limit (spring: 2 sqrt 2 / omega; springless and programmed: the
+    Baumgarte rate beta, whose roots are +-i beta with alpha = 0), never above the cap."""
+    system = ProgrammedMotion(two_sliders(8.0, 800.0))
+    half_spring = STEP_SAFETY * SQRT8 / np.sqrt(800.0 / MASS)
+    for how in ("springs", "linearised"):
+        assert rk4_step(system, np.zeros(2), how=how) == pytest.approx(half_spring, rel=1e-6)
+    assert rk4_step(system, np.zeros(2), cap=0.01) == 0.01
+    prog = CoordinateProgramme(Sine(0.0, 0.01, 1.0, 0.0), axis=0, name="P")
+    free = ProgrammedMotion(two_sliders(0.0, 0.0), [prog], dependent=["x"],
+                            baumgarte=(0.0, 300.0))
+    assert rk4_step(free, np.zeros(2)) == pytest.approx(STEP_SAFETY * SQRT8 / 300.0, rel=1e-6)
 
 
 def test_unstable_step_refused_before_the_run_and_stable_one_accepted():

@@ -15,7 +15,8 @@ import pytest
 
 from gpme.cli import main as gpme_main
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.integrate import simulate
+from gpme_core.stability import suggest_rk4_step
 from gpme_io.file_names import file_stem
 from gpme_study import metrics as mx
 from gpme_study.plots import safe_mask, write_plots

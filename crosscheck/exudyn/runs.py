@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.errors import ConstraintError, SimulationError
-from gpme_core.integrate import suggest_rk4_step
+from gpme_core.stability import rk4_step
 
 from .. import halving_gates, run_gates
 from ..compare import Tolerance, compare
@@ -383,12 +383,12 @@ def consistent_start_state(scenario, log=None):
 def first_step(scenario) -> float:
     """s, Exudyn's default first step: EXUDYN_DT, or for a model with stiff springs (RFEM
     links) the step at which the stiffest linearised mode lambda_max at the start has
-    |lambda_max| h ~ 1.4 (half RK4's stability step, gpme_core.integrate.suggest_rk4_step),
+    |lambda_max| h ~ 1.4 (half RK4's stability step, gpme_core.stability.rk4_step),
     whichever is smaller.  Generalized-alpha damps a mode with |lambda| h >> 1 towards
     rho_inf per step instead of following it, so its error only becomes O(h^2) once
     |lambda| h < 1: from 1e-3 s the UR10's CFRP forearm (lambda ~ 2e4 1/s) needed more
     halvings than any budget (observed order < 1 down to 6e-5 s)."""
-    return whole_steps(min(EXUDYN_DT, suggest_rk4_step(scenario.model, scenario.q0)))
+    return whole_steps(rk4_step(scenario.system, scenario.q0, cap=EXUDYN_DT))
 
 
 def whole_steps(dt: float, output_dt: float = OUTPUT_DT) -> float:

@@ -28,7 +28,8 @@ import numpy as np
 import pandas as pd
 
 from gpme_core.errors import GpmeError
-from gpme_core.integrate import simulate, suggest_rk4_step
+from gpme_core.integrate import simulate
+from gpme_io.runs import resolved_step
 
 from .. import run_gates
 from ..crane_cases import crane_cases
@@ -71,9 +72,8 @@ def default_scenarios(quick: bool = False) -> list:
 
 
 def _dt(scenario):
-    if scenario.dt is not None:
-        return float(scenario.dt)
-    return suggest_rk4_step(scenario.model, scenario.q0)
+    """s, the scenario's RK4 step, the one gpme's own run takes (gpme_io.runs)."""
+    return resolved_step(scenario)
 
 
 def _state_columns(model):

@@ -31,7 +31,8 @@ import pinocchio as pin
 
 from gpme_core.errors import SimulationError
 from gpme_core.gpme import ProgrammedMotion
-from gpme_core.integrate import DIVERGENCE_LIMIT, rk4_step_plan, suggest_rk4_step
+from gpme_core.integrate import DIVERGENCE_LIMIT, rk4_step_plan
+from gpme_io.runs import resolved_step
 
 from .. import run_gates
 from ..compare import Tolerance, compare
@@ -206,10 +207,9 @@ def run_t_end(scenario, quick: bool) -> float:
 
 
 def run_step(scenario) -> float:
-    """s, the scenario's RK4 step (suggested from its q0 when the scenario has none)."""
-    if scenario.dt is not None:
-        return float(scenario.dt)
-    return suggest_rk4_step(scenario.model, scenario.q0)
+    """s, the scenario's RK4 step (gpme_io.runs.resolved_step: the one gpme's own run of
+    the scenario takes)."""
+    return resolved_step(scenario)
 
 
 def exact_columns(scenario):

@@ -24,7 +24,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import Drive, Frame, Model, validate_model
 from gpme_core.rfem import BeamSection
-from gpme_core.stability import STEP_SAFETY, rk4_limit
+from gpme_core.stability import STEP_SAFETY, rk4_limit, safe_step
 from gpme_core.statics import static_equilibrium
 from gpme_core.time_functions import SympyTimeFunction, Tabulated
 from gpme_examples.crane import CraneParameters, build_crane
@@ -261,15 +261,16 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
     run = spec.run
     dt = run.dt
     if run.integrator == "RK4":
-        suggested = suggested_step(system, q0, run.output_dt)
+        # the springs, dampers, inertia and Baumgarte rates at q0 (gpme_core.stability)
+        limit, _ = rk4_limit(system, 0.0, q0, np.zeros_like(q0), how="springs")
         if dt is None:
-            dt = suggested
+            dt = safe_step(limit, run.output_dt)      # = stability.rk4_step(system, q0, ...)
             notes.append(f"run: RK4 step dt = {dt:.3g} s suggested at q0 ({STEP_SAFETY:g} x the "
                          "RK4 stability limit of the springs, dampers and Baumgarte rates, at "
                          "most output_dt)")
-        elif dt > suggested / STEP_SAFETY:
+        elif dt > limit:
             notes.append(f"run: dt = {dt:g} s is above the RK4 stability limit "
-                         f"{suggested / STEP_SAFETY:.3g} s estimated at q0; the run may diverge")
+                         f"{limit:.3g} s estimated at q0; the run may diverge")
     return Scenario(name=model.name, model=model, constraints=tuple(constraints), system=system,
                     q0=q0, q_dot0=q_dot0, t_end=run.t_end, quick_t_end=run.quick_t_end,
                     integrator=run.integrator, dt=dt, output_dt=run.output_dt,
@@ -335,11 +336,3 @@ def _on_constraints(system: ProgrammedMotion, q0, q_dot0, label: str):
         raise ConstraintError(f"{label}: initial.on_constraints = true: {exc}. At the given "
                               f"q0 the constraints are {values}; change initial.q or the "
                               "constraints so that they can be met") from None
-
-
-def suggested_step(system: ProgrammedMotion, q0, output_dt: float) -> float:
-    """s: STEP_SAFETY x the RK4 stability step of the linearised springs, dampers and
-    inertia at q0 and of the Baumgarte dynamics s^2 + 2 alpha s + beta^2 = 0
-    (gpme_core.stability, the "springs" estimate), at most ``output_dt``."""
-    limit, _ = rk4_limit(system, 0.0, q0, np.zeros_like(q0), how="springs")
-    return float(min(STEP_SAFETY * limit, output_dt))
