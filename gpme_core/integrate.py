@@ -1,5 +1,7 @@
-"""Time integration of the GPME: fixed-step classical RK4 (as in the paper) or SciPy's
-solve_ivp (RK45, DOP853, Radau), returning a tidy pandas DataFrame.
+"""Time integration of the GPME: fixed-step classical RK4 (as in the paper), the compiled
+RadauIIA, or SciPy's solve_ivp (RK45, DOP853, Radau).  :func:`run` returns a
+gpme_core.run_result.RunResult (the histories as arrays, the metadata as fields);
+:func:`simulate` its tidy pandas DataFrame.
 
 The integrated state is y = (q, q_dot, W_dissipated, W_drive, W_reaction): the three
 work integrals (J) are integrated with the same scheme, so the energy balance
@@ -14,12 +16,10 @@ coordinates: the system passed to :func:`simulate` is not changed.  When the par
 becomes badly conditioned (gpme_core.gpme.SWITCH_RCOND) the run re-chooses it by pivoting
 and records the switch in ``df.attrs["events"]`` (see :func:`simulate`).
 """
-import inspect
 import logging
 import time
 
 import numpy as np
-import pandas as pd
 from scipy.integrate import solve_ivp
 
 from .dynamics import kinetic_energy, potential_energy
@@ -33,6 +33,7 @@ from .methods import (EXPLICIT_ADAPTIVE_METHODS, FIXED_STEP_METHODS, IMPLICIT_ME
                       METHODS)
 from .progress import Progress
 from .run_cost import estimate_run, time_evaluation
+from .run_result import RunResult, RunSettings
 from .singular_approach import approach
 from .stability import rk4_limit, safe_step, unstable_step_message
 
@@ -111,7 +112,7 @@ def _rhs_factory(partition, n):
 
 
 def _check_state(model, t, y, n, dt=None):
-    q, q_dot = y[:n], y[n:2 * n]
+    q = y[:n]
     bad = ~np.isfinite(y[:2 * n]) | (np.abs(y[:2 * n]) > DIVERGENCE_LIMIT)
     if bad.any():
         names = [f"{model.coordinate_names[k % n]}{'' if k < n else '_dot'}"
@@ -340,7 +341,10 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
              rtol=1e-8, atol=1e-10, on_manifold=False, progress=None,
              switch_rcond=SWITCH_RCOND, check_step=True, before_run=None,
              max_wall_s=None, compiled=True):
-    """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s).
+    """Integrate ``system`` (a gpme_core.gpme.ProgrammedMotion) from t = 0 to t_end (s);
+    the history as a DataFrame: ``run(system, t_end, q0, q_dot0, RunSettings(dt=dt, ...),
+    progress, before_run).to_frame()`` (:func:`run`; the settings are
+    gpme_core.run_result.RunSettings' fields, documented here).
 
     q0, q_dot0 : (n,) initial coordinates and velocities, ordered as model.coordinate_names
     dt         : s, RK4 step; shortened if needed to fit a whole number of steps into
@@ -392,35 +396,44 @@ def simulate(system, t_end, q0, q_dot0, dt=None, method="RK4", output_dt=1e-3,
     they happened; with the solve_ivp methods "t" is the time of the evaluation that
     switched, which may belong to a step the method later rejected.
     """
-    return _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
-                         on_manifold, progress, switch_rcond, check_step, before_run,
-                         max_wall_s, compiled, estimate_only=False)
+    settings = RunSettings(dt=dt, method=method, output_dt=output_dt, rtol=rtol, atol=atol,
+                           on_manifold=on_manifold, switch_rcond=switch_rcond,
+                           check_step=check_step, max_wall_s=max_wall_s, compiled=compiled)
+    return run(system, t_end, q0, q_dot0, settings, progress, before_run).to_frame()
 
 
-# simulate's settings with their defaults, in its order (estimate_simulation takes the same)
-_SETTINGS = {name: p.default for name, p in inspect.signature(simulate).parameters.items()
-             if p.default is not inspect.Parameter.empty}
+def run(system, t_end, q0, q_dot0, settings=RunSettings(), progress=None, before_run=None):
+    """gpme_core.run_result.RunResult of ``system`` from t = 0 to ``t_end`` (s) integrated
+    as ``settings`` (gpme_core.run_result.RunSettings) say; progress and before_run as in
+    :func:`simulate` (which documents the columns, the settings and the errors)."""
+    return _plan_and_run(system, t_end, q0, q_dot0, _checked_settings(settings), progress,
+                         before_run, estimate_only=False)
 
 
-def estimate_simulation(system, t_end, q0, q_dot0, **settings):
-    """gpme_core.run_cost.RunCost of ``simulate(system, t_end, q0, q_dot0, **settings)``
-    without running it: the inputs and the step are checked as simulate checks them (the
-    same errors), and one right-hand-side evaluation is timed (after compilation).
-    settings: simulate's keyword arguments."""
-    unknown = set(settings) - set(_SETTINGS)
-    if unknown:
-        raise TypeError(f"estimate_simulation() got unexpected settings {sorted(unknown)}; "
-                        f"simulate's are {list(_SETTINGS)}")
-    merged = {**_SETTINGS, **settings}
-    return _plan_and_run(system, t_end, q0, q_dot0, *(merged[k] for k in _SETTINGS),
-                         estimate_only=True)
+def estimate_simulation(system, t_end, q0, q_dot0, settings=None, **changes):
+    """gpme_core.run_cost.RunCost of ``run(system, t_end, q0, q_dot0, settings)`` without
+    running it: the inputs and the step are checked as simulate checks them (the same
+    errors), and one right-hand-side evaluation is timed (after compilation).
+    settings: a RunSettings (default RunSettings()); changes: settings given by name, as
+    simulate takes them (an unknown name is a TypeError naming the known ones)."""
+    settings = _checked_settings(settings or RunSettings()).with_changes(**changes)
+    return _plan_and_run(system, t_end, q0, q_dot0, settings, None, None, estimate_only=True)
 
 
-def _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
-                  on_manifold, progress, switch_rcond, check_step, before_run, max_wall_s,
-                  compiled, estimate_only):
-    """simulate's work (see there); with ``estimate_only`` it stops before the first step
+def _checked_settings(settings):
+    if not isinstance(settings, RunSettings):
+        raise ModelError(f"settings must be a gpme_core.run_result.RunSettings, got "
+                         f"{type(settings).__name__}")
+    return settings
+
+
+def _plan_and_run(system, t_end, q0, q_dot0, settings, progress, before_run, estimate_only):
+    """run's work (see simulate); with ``estimate_only`` it stops before the first step
     and returns the RunCost (estimate_simulation)."""
+    dt, method, output_dt = settings.dt, settings.method, settings.output_dt
+    rtol, atol, on_manifold = settings.rtol, settings.atol, settings.on_manifold
+    switch_rcond, check_step = settings.switch_rcond, settings.check_step
+    max_wall_s, compiled = settings.max_wall_s, settings.compiled
     if not isinstance(system, ProgrammedMotion):
         raise ModelError(f"system must be a gpme_core.gpme.ProgrammedMotion (a model with its "
                          f"constraints; ProgrammedMotion(model) for none), got "
@@ -547,20 +560,19 @@ def _plan_and_run(system, t_end, q0, q_dot0, dt, method, output_dt, rtol, atol,
             _raise_with_singular_sets(start_system, exc)
             raise
     wall = time.perf_counter() - start
-    df = history_frame(start_system, ts, ys, switch_rcond)
-    df.attrs.update(model=model.name, method=method, dt=dt,
-                    rtol=None if method in FIXED_STEP_METHODS else rtol, wall_time_s=wall,
-                    compiled=compiled is not None,
-                    compiled_reason="" if compiled is not None else not_compiled,
-                    rhs_evaluations=nfev, dependent=list(dependent),
-                    dependent_final=list(partition.dependent), events=events,
-                    switch_rcond=switch_rcond,
-                    baumgarte=(system.alpha, system.beta), on_manifold=on_manifold)
-    return df
+    return RunResult(history_table(start_system, ts, ys, switch_rcond), model=model.name,
+                     method=method, dt=dt,
+                     rtol=None if method in FIXED_STEP_METHODS else rtol, wall_time_s=wall,
+                     compiled=compiled is not None,
+                     compiled_reason="" if compiled is not None else not_compiled,
+                     rhs_evaluations=nfev, dependent=dependent,
+                     dependent_final=partition.dependent, events=events,
+                     switch_rcond=switch_rcond, baumgarte=(system.alpha, system.beta),
+                     on_manifold=on_manifold)
 
 
 def history_columns(system):
-    """Number of columns of :func:`history_frame` for ``system``: t, q, q_dot, three per
+    """Number of columns of :func:`history_table` for ``system``: t, q, q_dot, three per
     constraint, one per driven coordinate, three per frame, and six energy columns."""
     model = system.model
     drives = {d.joint for d in model.drives}
@@ -568,8 +580,9 @@ def history_columns(system):
             + 3 * len(model.frames) + 6)
 
 
-def history_frame(system, ts, ys, switch_rcond=SWITCH_RCOND):
-    """Tidy DataFrame of a run: one row per recorded time (see :func:`simulate`).
+def history_table(system, ts, ys, switch_rcond=SWITCH_RCOND):
+    """{column name: (k,) array} of a run, one entry per recorded time, in the column
+    order of :func:`simulate`'s history.
 
     system : ProgrammedMotion with its dependent coordinates set (not changed); the rows
              are solved with a partition switched as in a run (``switch_rcond``), which
@@ -622,4 +635,4 @@ def history_frame(system, ts, ys, switch_rcond=SWITCH_RCOND):
     e_tot = e_k + e_p
     cols["E_balance_error"] = (e_tot - e_tot[0]) - (cols["W_drive"] + cols["W_reaction"]
                                                     - cols["W_dissipated"])
-    return pd.DataFrame(cols)
+    return cols

@@ -6,9 +6,10 @@ from pathlib import Path
 from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
                               atomic_write_text)
 from gpme_core.errors import ModelError
-from gpme_core.integrate import estimate_simulation, simulate
+from gpme_core.integrate import estimate_simulation, run
 from gpme_core.stability import rk4_step
 from gpme_core.methods import METHODS, RADAU_IIA, RK4
+from gpme_core.run_result import RunSettings
 from gpme_io.file_names import named_path
 from gpme_io.progress import progress_callback
 
@@ -27,8 +28,8 @@ def resolved_step(scenario, dt=None):
     return float(step)
 
 
-def _run_settings(scenario, t_end, dt, method, quick, output_dt):
-    """(method, t_end s, output_dt s, step s or None) of one run of ``scenario``."""
+def _run_settings(scenario, t_end, dt, method, quick, output_dt, max_wall_s=None):
+    """(t_end s, gpme_core.run_result.RunSettings) of one run of ``scenario``."""
     method = method or scenario.integrator
     if method not in METHODS:
         raise ModelError(f"integrator must be one of {METHODS}, got {method!r}")
@@ -42,7 +43,7 @@ def _run_settings(scenario, t_end, dt, method, quick, output_dt):
         step = scenario.dt           # the model file's RadauIIA step (None: its default)
     else:
         step = dt
-    return method, t_end, out_dt, step
+    return t_end, RunSettings(dt=step, method=method, output_dt=out_dt, max_wall_s=max_wall_s)
 
 
 def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, progress=False,
@@ -58,10 +59,9 @@ def simulate_scenario(scenario, t_end=None, dt=None, method=None, quick=False, p
              (silent) or a callable given the run's events (gpme_core.progress)
     before_run, max_wall_s : as gpme_core.integrate.simulate
     """
-    method, t_end, out_dt, step = _run_settings(scenario, t_end, dt, method, quick, output_dt)
-    df = simulate(scenario.system, t_end, scenario.q0, scenario.q_dot0, method=method,
-                  output_dt=out_dt, progress=progress_callback(progress), dt=step,
-                  before_run=before_run, max_wall_s=max_wall_s)
+    t_end, settings = _run_settings(scenario, t_end, dt, method, quick, output_dt, max_wall_s)
+    df = run(scenario.system, t_end, scenario.q0, scenario.q_dot0, settings,
+             progress_callback(progress), before_run).to_frame()
     df.attrs["scenario"] = scenario.name
     return df
 
@@ -70,9 +70,8 @@ def estimate_scenario(scenario, t_end=None, dt=None, method=None, quick=False,
                       output_dt=None):
     """gpme_core.run_cost.RunCost of :func:`simulate_scenario` with the same arguments,
     without running it (gpme_core.integrate.estimate_simulation)."""
-    method, t_end, out_dt, step = _run_settings(scenario, t_end, dt, method, quick, output_dt)
-    return estimate_simulation(scenario.system, t_end, scenario.q0, scenario.q_dot0,
-                               method=method, output_dt=out_dt, dt=step)
+    t_end, settings = _run_settings(scenario, t_end, dt, method, quick, output_dt)
+    return estimate_simulation(scenario.system, t_end, scenario.q0, scenario.q_dot0, settings)
 
 
 def events_json(df):

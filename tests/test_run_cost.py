@@ -51,7 +51,7 @@ def test_simulate_returns_a_history_and_estimate_simulation_a_cost():
     q0, q_dot0 = initial_state(system.model)
     with pytest.raises(TypeError):
         simulate(system, 0.01, q0, q_dot0, estimate_only=True)
-    with pytest.raises(TypeError, match="unexpected settings"):
+    with pytest.raises(TypeError, match="unknown run settings"):
         estimate_simulation(system, 0.01, q0, q_dot0, estimate_only=True)
     cost = estimate_simulation(system, 0.01, q0, q_dot0, dt=1e-4)
     assert cost.steps == 100
