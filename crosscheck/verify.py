@@ -25,6 +25,7 @@ is in summary.json ("diff"), at the top of index.html and printed at the end.  F
 summary of the run (crosscheck.reports.junit, crosscheck.reports.summary_md; docs/ci.md).
 """
 import json
+import logging
 import shutil
 import time
 import traceback
@@ -55,8 +56,9 @@ from .verify_meta import environment
 STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
 OPTIONAL_STEPS = ("drake", "exudyn")      # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
-def _say(msg):
-    print(msg, flush=True)
+# what verify is doing, one line per step and run (shown by the `gpme` command's logging
+# setup, gpme/console_log.py; silent when called as a library)
+log = logging.getLogger("gpme.verify")
 
 
 def default_scenarios(step, quick):
@@ -72,7 +74,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
     figures a built-in example adds (paper/: the paper's crane, gpme_io.example_outputs)."""
     rows, rfem_rows, runs = [], [], []
     for scenario in scenarios:
-        _say(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
+        log.info(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
         rfem_rows += rfem_reference.rfem_rows(scenario)     # RFEM vs beam theory
 
         def run(dt, scenario=scenario):
@@ -85,14 +87,14 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
         if scenario.integrator == "RK4":
             # the step `gpme simulate` chooses: halved until the run's own checks pass
             # (crosscheck/accurate_step.py), so both commands judge the same run
-            choice = run_accurately(run, checks, report=lambda line: _say(f"    {line}"),
+            choice = run_accurately(run, checks, report=lambda line: log.info(f"    {line}"),
                                     start="the model file's step")
             df, scenario_rows = choice.df, choice.rows
-            _say(f"    {choice.note}")
+            log.info(f"    {choice.note}")
         else:
             df = run(None)
             scenario_rows = checks(df)
-        _say(f"    wall time {df.attrs['wall_time_s']:.1f} s")
+        log.info(f"    wall time {df.attrs['wall_time_s']:.1f} s")
         write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
         rows += scenario_rows
         runs.append((scenario, df))
@@ -145,11 +147,11 @@ def _report_crash(staging, step, exc):
     """One line on the console; the traceback of an unexpected exception (not a gpme input
     or run error, whose message says it all) into <run>/<step>_crash.txt."""
     if isinstance(exc, GpmeError):
-        _say(f"[{step}] stopped: {exc}")
+        log.info(f"[{step}] stopped: {exc}")
         return
     path = staging / f"{step}_crash.txt"
     atomic_write_text(path, "".join(traceback.format_exception(exc)))
-    _say(f"[{step}] crashed: {type(exc).__name__}: {exc} (traceback in "
+    log.info(f"[{step}] crashed: {type(exc).__name__}: {exc} (traceback in "
          f"{path.name} of the report; please report it as a gpme bug)")
 
 
@@ -206,7 +208,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     root.mkdir(parents=True, exist_ok=True)
     previous = run_store.previous_report(root, compare_to)
     for name in run_store.remove_dead_partials(root):
-        _say(f"removed {root / name}: the partial directory of a run that died")
+        log.info(f"removed {root / name}: the partial directory of a run that died")
     staging = run_store.claim_run_dir(root, run_id)
     try:
         result = _run_steps(root, staging, run_id, quick, only, progress, scenarios,
@@ -215,7 +217,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
         shutil.rmtree(staging, ignore_errors=True)
         raise
     for name in run_store.prune_runs(root, keep):
-        _say(f"removed {root / name} (--keep {keep})")
+        log.info(f"removed {root / name} (--keep {keep})")
     return result
 
 
@@ -229,14 +231,14 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     for step in STEPS:
         if only and step != only:
             continue
-        _say(f"[{step}] ...")
+        log.info(f"[{step}] ...")
         t0 = time.perf_counter()
         try:
             if step == "gpme":
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
                 tables[step] = _models_step(staging, chosen, quick, progress, max_wall_s)
             elif step in OPTIONAL_STEPS and missing_message(step):
-                _say(f"[{step}] skipped: {missing_message(step)}")
+                log.info(f"[{step}] skipped: {missing_message(step)}")
                 tables[step] = _missing_engine_row(step, missing_message(step))
                 write_rows(normalise(tables[step]), staging, step)
             else:
@@ -253,7 +255,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
             _report_crash(staging, step, exc)
         timings[step] = time.perf_counter() - t0
         failed = int(failed_checks(tables[step]).sum())
-        _say(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
+        log.info(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
              f"{timings[step]:.1f} s")
     _merge_prerequisites(staging, tables, prerequisites)
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
@@ -262,7 +264,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     summary = summary_of(rows)
     warnings = run_warnings(rows.to_dict("records")) if "reason" in rows.columns else []
     for warning in warnings:
-        _say(f"WARNING {warning}")
+        log.warning(warning)
     meta = environment(quick=quick, only=only, run_id=run_id,
                        wall_time_s=time.perf_counter() - start, step_times_s=timings)
     write_csv(summary, staging / "summary.csv")
@@ -335,9 +337,9 @@ def estimate_runs(scenarios, quick, force):
     """Print the estimated cost of the gpme runs of a verification before any work, and
     refuse (gpme_io.budget.BudgetError) one above the limits unless ``force``; an input problem
     found on the way (an unstable step in a model file, say) is raised here too."""
-    _say("estimated cost of the gpme runs (the engine steps take about as long again):")
+    log.info("estimated cost of the gpme runs (the engine steps take about as long again):")
     for scenario in scenarios if scenarios is not None else default_scenarios("gpme", quick):
-        _say(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
+        log.info(f"  {scenario.name}, {scenario.t_run(quick):g} s:")
         run_budget(scenario.name, force)(estimate_scenario(scenario, quick=quick))
 
 

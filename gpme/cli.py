@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpme import signals
+from gpme import console_log, signals
 from gpme.signals import Terminated  # noqa: F401  (re-exported: gpme.cli.Terminated)
 from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.methods import FIXED_STEP_METHODS, METHODS
@@ -364,6 +364,7 @@ def main(argv=None, ignore_late_signals=False):
     """Run one command; returns its exit status (docs/ci.md): 0 passed, 1 a check failed,
     2 bad input, 130 Ctrl-C, 128 + the signal number for SIGTERM (143) and SIGHUP (129)."""
     args = build_parser().parse_args(argv)
+    console_log.configure()          # what the library modules log is shown (INFO, stdout)
     signals.install()
     try:
         code = args.func(args)

@@ -19,6 +19,7 @@ crosscheck.compare.compare; docs/crosscheck-mujoco.md):
                   against MuJoCo's constraint stabilisation; information only.
 6. wall time    : information.
 """
+import logging
 import time
 import zlib
 from pathlib import Path
@@ -45,6 +46,8 @@ from .terms import ENGINE, sample_states, term_rows
 INFO = "information: {}"
 EXACT = "exact programmed run"
 FREE = "free run"
+
+logger = logging.getLogger("gpme.crosscheck.mujoco")
 
 
 def _info(reason):
@@ -248,7 +251,7 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
 
     def log(msg):
         if progress:
-            print(f"[mujoco {time.perf_counter() - start:6.1f} s] {msg}", flush=True)
+            logger.info(f"[mujoco {time.perf_counter() - start:6.1f} s] {msg}")
 
     plots, rows, tables = {}, [], []
     for s in scenarios:
