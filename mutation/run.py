@@ -4,12 +4,15 @@
     python -m mutation.run --all --modules kinematics dynamics   # every mutant of modules
     python -m mutation.run --rerun-survivors OUT             # after new tests: survivors only
     python -m mutation.run --report OUT                      # summary of a finished run
+    python -m mutation.run --modules kernels --sample 100 --seed 20260511 --out OUT
+                                                             # kernels.py, its own sample
 
 One cosmic-ray session (sqlite) per module under OUT (default mutation/out); one worker
 process (cosmic-ray's local distributor runs the mutants one after another); run it with
-``nice -n 10``.  Modules other than fast.py are tested with GPME_NO_JIT=1 (the numpy
-reference path); fast.py and the ``if fast.ENABLED:`` dispatch blocks with numba on (the
-kernels are recompiled for every fast.py mutant); see mutation/killsuite.py.
+``nice -n 10``.  Modules other than fast.py and kernels.py are tested with GPME_NO_JIT=1
+(the numpy reference path); fast.py, kernels.py and the ``if fast.ENABLED:`` dispatch
+blocks with numba on (the kernels are recompiled for every fast.py or kernels.py mutant);
+see mutation/killsuite.py.
 """
 import argparse
 import json
@@ -24,8 +27,18 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
+# the physics modules of the joint seeded sample (docs/mutation.md: its population of 3284)
 MODULES = ("kinematics", "dynamics", "rfem", "inertia", "constraints", "gpme", "integrate",
            "fast")
+# modules sampled from their own population only (the same --sample and --seed, drawn from
+# that module's mutants alone), so that adding one leaves the joint sample of MODULES as it
+# was: gpme_core/kernels.py (the fused compiled right-hand side and the RK4 / Radau IIA
+# loops every compiled run goes through; issue 25)
+OWN_SAMPLE = ("kernels",)
+ALL_MODULES = MODULES + OWN_SAMPLE
+# modules tested with numba on as a whole (mutation/killsuite.py), each mutant recompiling
+# what it touches (gpme_core/jit_cache.py stamps every cached kernel with its sources)
+JIT_MODULES = ("fast", "kernels")
 
 # Operators left out: replacing an arithmetic operator by //, %, <<, >>, |, &, ^ and a
 # comparison by is / is not, a unary minus by ~ / not: on floats and float arrays these
@@ -53,8 +66,18 @@ SLOW = ["tests/test_integrators.py::test_scipy_methods_match_rk4",
 FIRST = {"kinematics": ["tests/test_kinematics.py"], "dynamics": ["tests/test_dynamics.py"],
          "rfem": ["tests/test_rfem.py", "tests/test_statics.py"], "inertia": [],
          "constraints": ["tests/test_gpme.py"], "gpme": ["tests/test_gpme.py"],
-         "integrate": ["tests/test_integrators.py"], "fast": ["tests/test_fast.py"]}
+         "integrate": ["tests/test_integrators.py"], "fast": ["tests/test_fast.py"],
+         # the compiled evaluation against the numpy reference (tests/test_compiled.py), the
+         # compiled RK4 / Radau IIA loops against the Python loop and their order
+         # (tests/test_compiled_runs.py), the compiled reduced solve (tests/test_fast.py);
+         # CORE then runs solve() and every simulation through the kernels too
+         "kernels": ["tests/test_compiled.py", "tests/test_compiled_runs.py",
+                     "tests/test_fast.py"]}
 TIMEOUT = 60.0
+# a kernels.py mutant recompiles the fused evaluation, the RK4 and Radau IIA loops and the
+# module generated for the SymPy parts (the whole suite ~60 s cold on the shared machine,
+# against ~36 s warm): a longer limit, so that a slow compile is not counted as a kill
+TIMEOUTS = {"kernels": 180.0}
 
 
 def kill_tests(module, with_new=True):
@@ -78,7 +101,7 @@ def write_config(out, module, with_new=True):
     cfg.write_text(
         "[cosmic-ray]\n"
         f'module-path = "gpme_core/{module}.py"\n'
-        f"timeout = {TIMEOUT}\n"
+        f"timeout = {TIMEOUTS.get(module, TIMEOUT)}\n"
         "excluded-modules = []\n"
         f"test-command = {json.dumps(test_command(module, with_new))}\n\n"
         "[cosmic-ray.distributor]\nname = \"local\"\n")
@@ -112,14 +135,14 @@ def delete_jobs(db, job_ids):
     con.close()
 
 
-def clean_population(tmp):
-    """Every mutant of every physics module, made from gpme_core as committed (git HEAD,
-    exported to ``tmp``: independent of a mutant that may be applied in the work tree)."""
+def clean_population(tmp, modules=MODULES):
+    """Every mutant of ``modules``, made from gpme_core as committed (git HEAD, exported
+    to ``tmp``: independent of a mutant that may be applied in the work tree)."""
     archive = subprocess.run(["git", "archive", "HEAD", "gpme_core"], cwd=ROOT, check=True,
                              capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(tmp)], input=archive, check=True)
     dbs = {}
-    for m in MODULES:
+    for m in modules:
         db = tmp / f"{m}.sqlite"
         cfg = write_config(tmp, m)
         subprocess.run([str(Path(PY).parent / "cosmic-ray"), "init", str(cfg), str(db)],
@@ -141,25 +164,34 @@ def copy_rows(src, dst, job_ids):
 
 def init(out, modules, sample, seed, with_new, extend=False, sample_fast=0):
     """Sessions for ``modules`` holding the seeded sample (drawn from the population of ALL
-    physics modules, so it does not depend on --modules; random.sample's first k draws are
-    the sample of size k).  extend: add the missing sampled mutants to existing sessions,
-    keeping their results."""
+    physics modules of MODULES, so it does not depend on --modules; random.sample's first k
+    draws are the sample of size k; a module of OWN_SAMPLE has its own sample of the same
+    size and seed from its own mutants).  extend: add the missing sampled mutants to
+    existing sessions, keeping their results."""
     import shutil
     import tempfile
     out.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix="gpme_mut_"))
+    joint = any(m in MODULES for m in modules)
+    own = [m for m in modules if m in OWN_SAMPLE]
     try:
-        dbs = clean_population(tmp)
-        population = sorted(((m, r) for m in MODULES for r in specs(dbs[m])),
-                            key=lambda mr: spec_key(mr[1]))
-        chosen = population
-        if sample:
-            chosen = random.Random(seed).sample(population, min(sample, len(population)))
-        if sample and sample_fast:
+        dbs = clean_population(tmp, (MODULES if joint else ()) + tuple(own))
+        population, chosen = [], []
+        if joint:
+            population = sorted(((m, r) for m in MODULES for r in specs(dbs[m])),
+                                key=lambda mr: spec_key(mr[1]))
+            chosen = population
+            if sample:
+                chosen = random.Random(seed).sample(population, min(sample, len(population)))
+        if sample and sample_fast and joint:
             # fast.py mutants cost a numba compile each (~35 s on the shared machine): keep
             # only those among the first sample_fast draws (a smaller random sample of fast.py)
             first = {spec_key(r) for _, r in random.Random(seed).sample(population, min(sample_fast, len(population)))}
             chosen = [(m, r) for m, r in chosen if m != "fast" or spec_key(r) in first]
+        for m in own:
+            pop = sorted(((m, r) for r in specs(dbs[m])), key=lambda mr: spec_key(mr[1]))
+            population += pop
+            chosen += random.Random(seed).sample(pop, min(sample, len(pop))) if sample else pop
         keys = {spec_key(r) for _, r in chosen}
         for m in modules:
             db = out / f"{m}.sqlite"
@@ -361,7 +393,9 @@ def scores(before, after, modules):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="mutation/out")
-    p.add_argument("--modules", nargs="+", default=list(MODULES), choices=MODULES)
+    p.add_argument("--modules", nargs="+", choices=ALL_MODULES,
+                   help=f"default: {' '.join(MODULES)} (the joint sample); --report, "
+                        "--rerun-survivors and --table: every module with a session in --out")
     p.add_argument("--sample", type=int, default=0, help="random sample size (0: all)")
     p.add_argument("--all", action="store_true", help="every mutant of --modules")
     p.add_argument("--seed", type=int, default=20260511)
@@ -378,6 +412,9 @@ def main(argv=None):
                    help="add the sampled mutants missing from existing sessions (keeps results)")
     a = p.parse_args(argv)
     out = (ROOT / a.out).resolve()
+    if a.modules is None:
+        a.modules = list(MODULES) if not (a.report or a.rerun_survivors or a.table) \
+            else list(ALL_MODULES)
     if a.report:
         return report(out, a.modules)
     if a.table:
