@@ -20,7 +20,8 @@ from .cost import estimate
 from .model_metrics import heat_map_metrics
 from .plots import write_plots
 from .runner import connect, pending_points, run_sweep
-from .spec import SweepSpecError, read_spec_file, spec_from_dict
+from .spec_points import SweepSpecError, read_spec_file
+from .sweep_spec import spec_from_dict
 
 RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
              "output_dt": "output_dt", "dt": "dt", "min_frequency": "min_frequency_hz",

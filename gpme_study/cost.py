@@ -309,7 +309,7 @@ class CostEstimate:
 
 def estimate(spec, points, workers=1, dask=False, report=None, budget_s=SAMPLE_BUDGET_S):
     """CostEstimate of running ``points`` (the pending points of ``spec``, a
-    gpme_study.spec.SweepSpec) on ``workers`` worker processes (``dask``: a cluster,
+    gpme_study.spec_points.SweepSpec) on ``workers`` worker processes (``dask``: a cluster,
     whose start-up is counted); ``report`` gets the first-call lines."""
     start = time.perf_counter()
     sampler = Sampler(report or (lambda line: None))

@@ -36,9 +36,9 @@ from gpme_io.modelfile.load import parse_model_data
 from .model_metrics import metric_columns
 from .model_paths import PathError, read_model_document
 from .model_point import scenario_from_document
-from .spec import (MAX_N_RFE, MODES, SweepSpec, SweepSpecError, _grid_points,
-                   _grid_values, _lhs_points, _limits, _list_points, _number, _plot_axes,
-                   _range, _swept, fill_defaults)
+from .spec_points import (MAX_N_RFE, MODES, SweepSpec, SweepSpecError, fill_defaults,
+                          grid_points, grid_values, lhs_points, limits_of, list_points, number,
+                          plot_axes, swept_names, value_range)
 
 MODEL_TOP_KEYS = ("model", "mode", "parameters", "points", "samples", "seed", "run", "limits",
                   "plot")
@@ -110,7 +110,7 @@ class ModelSpace:
         if isinstance(x, int) and x > MAX_N_RFE:
             problems.append(f"{named}: at most {MAX_N_RFE} RFEM segments in a sweep, got {x} "
                             "(the RK4 step of a beam falls as 1/segments^2; "
-                            "gpme_study.spec.MAX_N_RFE)")
+                            "gpme_study.spec_points.MAX_N_RFE)")
 
     def is_integer(self, name):
         return isinstance(self.document.coerce(name, self.document.value(name)), int)
@@ -153,12 +153,12 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
         parameters = {}
     points = []
     if mode == "grid":
-        points = _grid_points(parameters, problems, space)
+        points = grid_points(parameters, problems, space)
     elif mode == "lhs":
-        points = _lhs_points(parameters, data.get("samples"), data.get("seed", 0), problems,
+        points = lhs_points(parameters, data.get("samples"), data.get("seed", 0), problems,
                              space)
     elif mode == "list":
-        points = _list_points(data.get("points"), problems, space)
+        points = list_points(data.get("points"), problems, space)
         if parameters:
             problems.append("mode 'list' takes its points from 'points', not 'parameters'")
     for key, wanted in (("samples", "lhs"), ("seed", "lhs"), ("points", "list")):
@@ -166,7 +166,7 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
             problems.append(f"{shown(key)} is only used with mode {wanted!r} (mode is "
                             f"{shown(mode)})")
     fill_defaults(points, space)
-    swept = _swept(points)
+    swept = swept_names(points)
     for key in ("t_end", "dt", "output_dt"):
         if getattr(run, key) is not None and f"run.{key}" in swept:
             problems.append(f"run.{key} is both swept (parameter run.{key}) and set in the "
@@ -175,9 +175,9 @@ def model_spec_from_dict(data: dict, base_dir=None) -> SweepSpec:
     if columns:                   # the file itself builds: ask the loader about each value
         _value_problems(document, _candidate_values(document, data, mode, parameters), run,
                         problems)
-    limits = _limits(data.get("limits") or {}, problems, columns) if columns else {}
+    limits = limits_of(data.get("limits") or {}, problems, columns) if columns else {}
     plot = data.get("plot") or {}
-    plot_x, plot_y = _plot_axes(plot, swept, problems, space)
+    plot_x, plot_y = plot_axes(plot, swept, problems, space)
     if problems:
         raise SweepSpecError(problems)
     points = [{name: document.coerce(name, v) for name, v in pt.items()} for pt in points]
@@ -202,7 +202,7 @@ def _model_run_settings(run, problems) -> ModelRunSettings:
                 values[key] = value
             continue
         try:
-            x = _number(value)
+            x = number(value)
         except (ValueError, TypeError):
             problems.append(f"run.{key}: expected a number ({MODEL_RUN_KEYS[key]}), got "
                             f"{shown(value)}")
@@ -238,14 +238,14 @@ def _candidate_values(document, data, mode, parameters):
                  for name, value in pt.items()]
     elif isinstance(parameters, dict):
         for name, value in parameters.items():
-            values = _range(name, value, []) if mode == "lhs" else \
-                _grid_values(name, value, [])
+            values = value_range(name, value, []) if mode == "lhs" else \
+                grid_values(name, value, [])
             pairs += [(name, v) for v in values or ()]
     out = {}
     for name, value in pairs:
         try:
             path = document.canonical(str(name))
-            x = _number(value)
+            x = number(value)
         except (PathError, ValueError, TypeError):
             continue
         ok = []

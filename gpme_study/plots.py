@@ -190,7 +190,7 @@ def write_plots(table, out_dir, x, y, limits=None, metrics=HEAT_MAP_METRICS, uni
         return {}
     table = pd.DataFrame(table)
     # every point has both axes (a list's points are completed with the defaults,
-    # gpme_study.spec.fill_defaults); a row without one could not be placed on the map
+    # gpme_study.spec_points.fill_defaults); a row without one could not be placed on the map
     placed = pd.to_numeric(table[x], errors="coerce").notna() & \
         pd.to_numeric(table[y], errors="coerce").notna()
     table = table[placed]

@@ -47,7 +47,7 @@ def point_job(spec):
 
 def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
               report=print, in_process=False, client=None, terminal=True):
-    """Run every point of ``spec`` (a gpme_study.spec.SweepSpec) not yet in ``out_dir``.
+    """Run every point of ``spec`` (a gpme_study.spec_points.SweepSpec) not yet in ``out_dir``.
 
     scheduler    : address of an existing Dask scheduler, or None for a local cluster
     n_workers    : worker processes of the local cluster (default: one per core)

@@ -46,7 +46,7 @@ from gpme_io.urdf_writer import urdf_documents
 from gpme_io.xml_text import (NOT_XML_CHAR, comment_text, make_tree_safe, xml_comment,
                               xml_safe_text)
 from gpme_study.bounded_yaml import YamlSizeError, load_yaml
-from gpme_study.spec import SweepSpecError, read_spec_file
+from gpme_study.spec_points import SweepSpecError, read_spec_file
 
 ROOT = Path(__file__).resolve().parents[1]
 ARM_DIR = ROOT / "examples" / "my_arm"

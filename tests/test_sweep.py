@@ -22,7 +22,9 @@ from gpme_study import metrics as mx
 from gpme_study.plots import safe_mask, write_plots
 from gpme_study.point import point_key, run_point
 from gpme_study.runner import run_sweep
-from gpme_study.spec import RunSettings, SweepSpecError, load_spec, spec_from_dict
+from gpme_study.spec import RunSettings
+from gpme_study.spec_points import SweepSpecError
+from gpme_study.sweep_spec import load_spec, spec_from_dict
 from gpme_study.store import ResultStore
 
 SHORT = {"t_end": 1.0, "transient": 0.3}

@@ -19,7 +19,8 @@ from gpme_study.model_paths import read_model_document
 from gpme_study.model_point import model_point_key, run_model_point
 from gpme_study.model_spec import ModelRunSettings
 from gpme_study.runner import run_sweep
-from gpme_study.spec import SweepSpecError, spec_from_dict
+from gpme_study.spec_points import SweepSpecError
+from gpme_study.sweep_spec import spec_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 CRANE = ROOT / "models" / "crane_rigid.toml"
