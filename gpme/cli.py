@@ -220,7 +220,7 @@ def _crosscheck(args):
         scenarios = load_model_files(args.model) if args.model else default_scenarios(
             args.engine, args.quick)
         if args.engine == "mujoco":
-            from crosscheck.mujoco.names import scenario_name_problems   # loads MuJoCo
+            from crosscheck.mujoco.names import scenario_name_problems   # MJCF names
             scenario_name_problems(scenarios)
         estimate_runs(scenarios, args.quick, args.force)
     except OutputWriteError:

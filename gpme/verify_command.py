@@ -7,6 +7,7 @@ import pandas as pd
 
 from crosscheck import verify
 from crosscheck.engines import missing_message
+from crosscheck.mujoco.names import scenario_name_problems   # MuJoCo itself not loaded
 from crosscheck.reports import run_diff, strict_json
 from gpme_core.errors import GpmeError
 from gpme_io.budget import wall_limit
@@ -68,9 +69,7 @@ def main(args, problems=()):
         try:
             scenarios = load_model_files(args.model)
             if getattr(args, "only", None) in (None, "mujoco"):
-                # loads MuJoCo, only when its step runs
-                from crosscheck.mujoco.names import scenario_name_problems
-                scenario_name_problems(scenarios)
+                scenario_name_problems(scenarios)     # names MuJoCo's MJCF cannot take
         except GpmeError as exc:
             problems.append(str(exc))
     only = verify.STEP_ALIASES.get(getattr(args, "only", None), getattr(args, "only", None))
