@@ -13,7 +13,8 @@ back.  docs/urdf.md shows the layout:
     flexible_links  : [{"name", "n_segments", "beam": BeamProperties fields, "joints", "links"}]
     drives          : [{"joint", "function": a gpme_core.time_functions class name, "parameters"}]
 
-This module only knows the file: its path, its text, its validation.
+This module only knows the file: its path, its text, its validation (our own code, not a
+schema library, on purpose: docs/architecture.md, "Input validation").
 """
 import dataclasses
 import json
@@ -23,7 +24,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Optional
 
-from gpme_core.echo import did_you_mean
+from gpme_core.echo import did_you_mean, shown
 from gpme_core import time_functions
 from gpme_core.errors import ModelError, ModelFileError, SectionWarning
 from gpme_core.model import Model
@@ -99,7 +100,7 @@ def read_side_file(path) -> tuple:
         return None, [f"{label}: not JSON text ({what}); nothing in it was checked"]
     side, problems = check_side_file(side, label)
     if repeated:
-        problems.insert(0, f"{label}: keys given twice in one object: {_show(repeated)} (JSON "
+        problems.insert(0, f"{label}: keys given twice in one object: {shown(repeated)} (JSON "
                            "keeps only the last; give each once)")
     return side, problems
 
@@ -132,40 +133,40 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
     problems = _unknown_keys(label, side, SIDE_KEYS)
     if side.get("format") != SIDE_FORMAT or side.get("version") != SIDE_VERSION:
         problems.append(f"{label}: expected format {SIDE_FORMAT!r} version {SIDE_VERSION}, got "
-                        f"{_show(side.get('format'))} version {_show(side.get('version'))}")
+                        f"{shown(side.get('format'))} version {shown(side.get('version'))}")
     clean = {"format": SIDE_FORMAT, "version": SIDE_VERSION}
     if "model" in side:
         if isinstance(side["model"], str) and side["model"].strip():
             clean["model"] = side["model"]
         else:
             problems.append(f"{label}: model must be the model's name (a non-empty string), "
-                            f"got {_show(side['model'])}")
+                            f"got {shown(side['model'])}")
     if "gravity" in side:
         g = side["gravity"]
         if isinstance(g, list) and len(g) == 3 and all(_is_number(x) for x in g):
             clean["gravity"] = list(g)
         else:
             problems.append(f"{label}: gravity must be 3 finite numbers (m/s^2, world frame), "
-                            f"got {_show(g)}")
+                            f"got {shown(g)}")
     if "joints" in side:
         clean["joints"] = _check_joints(side["joints"], label, problems)
     if "massless_links" in side:
         links = side["massless_links"]
         if not isinstance(links, list):
             problems.append(f"{label}: massless_links must be a list of link names, got "
-                            f"{_show(links)}")
+                            f"{shown(links)}")
         else:
             bad = [x for x in links if not (isinstance(x, str) and x)]
             if bad:
                 problems.append(f"{label}: massless_links must hold link names (non-empty "
-                                f"strings), got {_show(bad)}")
+                                f"strings), got {shown(bad)}")
             clean["massless_links"] = [x for x in links if isinstance(x, str) and x]
     for key, check in (("flexible_links", _check_flexible), ("drives", _check_drive)):
         if key not in side:
             continue
         records = side[key]
         if not isinstance(records, list):
-            problems.append(f"{label}: {key} must be a list of records, got {_show(records)}")
+            problems.append(f"{label}: {key} must be a list of records, got {shown(records)}")
             continue
         clean[key] = []
         for k, rec in enumerate(records, start=1):
@@ -204,13 +205,6 @@ def _is_number(x: Any) -> bool:
         return False
 
 
-def _show(value: Any, limit: int = 160) -> str:
-    """repr of a value from the file, cut to ``limit`` characters (a message names the
-    value; it need not repeat a megabyte of it)."""
-    text = repr(value)
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
-
-
 def _json_type(x: Any) -> str:
     return {dict: "object", list: "array", str: "string", bool: "true/false",
             type(None): "null", int: "number", float: "number"}.get(type(x), type(x).__name__)
@@ -232,14 +226,14 @@ def _check_joints(joints: Any, label: str, problems: list) -> dict:
     """{joint: {stiffness, spring_reference}} of the valid joint records."""
     if not isinstance(joints, dict):
         problems.append(f"{label}: joints must be an object {{joint name: {{\"stiffness\": "
-                        f"N m/rad or N/m, \"spring_reference\": rad or m}}}}, got {_show(joints)}")
+                        f"N m/rad or N/m, \"spring_reference\": rad or m}}}}, got {shown(joints)}")
         return {}
     out = {}
     for name, rec in joints.items():
         where = f"{label}: joint {name!r}"
         if not isinstance(rec, dict):
             problems.append(f"{where} must hold only stiffness and spring_reference (an "
-                            f"object), got {_show(rec)}")
+                            f"object), got {shown(rec)}")
             continue
         bad = _unknown_keys(where, rec, JOINT_KEYS)
         for key in JOINT_KEYS:
@@ -249,7 +243,7 @@ def _check_joints(joints: Any, label: str, problems: list) -> dict:
             if not _is_number(val) or (key == "stiffness" and val < 0):
                 unit = "N m/rad or N/m" if key == "stiffness" else "rad or m"
                 bad.append(f"{where} {key} must be a finite number"
-                           f"{' >= 0' if key == 'stiffness' else ''} ({unit}), got {_show(val)}")
+                           f"{' >= 0' if key == 'stiffness' else ''} ({unit}), got {shown(val)}")
         problems += bad
         if not bad:
             out[name] = dict(rec)
@@ -260,13 +254,13 @@ def _check_flexible(rec: Any, label: str, k: int, bad: list) -> None:
     """Problems of flexible_links record number ``k`` (1-based) into ``bad``."""
     where = f"{label}: flexible link record (flexible_links #{k})"
     if not isinstance(rec, dict):
-        bad.append(f"{where}: expected an object with {', '.join(FLEXIBLE_KEYS)}, got {_show(rec)}")
+        bad.append(f"{where}: expected an object with {', '.join(FLEXIBLE_KEYS)}, got {shown(rec)}")
         return
     name = rec.get("name")
     if isinstance(name, str) and name:
         where = f"{label}: flexible link record {name!r} (flexible_links #{k})"
     else:
-        bad.append(f"{where}: name must be the link's name (a non-empty string), got {_show(name)}")
+        bad.append(f"{where}: name must be the link's name (a non-empty string), got {shown(name)}")
     bad += _unknown_keys(where, rec, FLEXIBLE_KEYS)
     missing = [key for key in FLEXIBLE_KEYS if key not in rec and key != "name"]
     if missing:
@@ -276,12 +270,12 @@ def _check_flexible(rec: Any, label: str, k: int, bad: list) -> None:
     if "n_segments" in rec and (not isinstance(n, int) or isinstance(n, bool)
                                 or not 0 <= n <= MAX_SEGMENTS):
         bad.append(f"{where}: n_segments must be an integer from 0 to {MAX_SEGMENTS}, "
-                   f"got {_show(n)}")
+                   f"got {shown(n)}")
     for key, what in (("joints", "joint"), ("links", "link")):
         v = rec.get(key)
         if key in rec and not (isinstance(v, list)
                                and all(isinstance(x, str) and x for x in v)):
-            bad.append(f"{where}: {key} must be a list of {what} names (strings), got {_show(v)}")
+            bad.append(f"{where}: {key} must be a list of {what} names (strings), got {shown(v)}")
     if "beam" in rec:
         _check_beam(rec["beam"], f"{where} beam", bad)
 
@@ -290,7 +284,7 @@ def _check_beam(beam: Any, where: str, bad: list) -> None:
     fields = [f.name for f in dataclasses.fields(BeamProperties)]
     if not isinstance(beam, dict):
         bad.append(f"{where}: expected an object with the BeamProperties fields "
-                   f"{', '.join(fields)}, got {_show(beam)}")
+                   f"{', '.join(fields)}, got {shown(beam)}")
         return
     n_before = len(bad)
     bad += _unknown_keys(where, beam, fields)
@@ -303,7 +297,7 @@ def _check_beam(beam: Any, where: str, bad: list) -> None:
             continue
         if not _is_number(val):
             bad.append(f"{where}: {key} must be a finite number"
-                       f"{' or null' if key in NULLABLE_BEAM_FIELDS else ''}, got {_show(val)}")
+                       f"{' or null' if key in NULLABLE_BEAM_FIELDS else ''}, got {shown(val)}")
     if len(bad) == n_before:
         with warnings.catch_warnings():         # the reader warns once, when it builds it
             warnings.simplefilter("ignore", SectionWarning)
@@ -334,14 +328,14 @@ def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
     where = f"{label}: drive record (drives #{k})"
     if not isinstance(rec, dict):
         bad.append(f"{where}: expected an object {{\"joint\": ..., \"function\": one of "
-                   f"{kinds}, \"parameters\": {{...}}}}, got {_show(rec)}")
+                   f"{kinds}, \"parameters\": {{...}}}}, got {shown(rec)}")
         return
     joint = rec.get("joint")
     if isinstance(joint, str) and joint:
         where = f"{label}: drive record on {joint!r} (drives #{k}"
     else:
         bad.append(f"{where}: joint must be the driven joint's name (a non-empty string), "
-                   f"got {_show(joint)}")
+                   f"got {shown(joint)}")
         where = f"{label}: drive record (drives #{k}"
     function, params = rec.get("function"), rec.get("parameters")
     if function == EXPRESSION_DRIVE:
@@ -350,13 +344,13 @@ def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
         fields, required, takes = _parameters(classes[function])
     else:
         bad += _unknown_keys(where + ")", rec, DRIVE_KEYS)
-        bad.append(f"{where}): function must be one of {kinds}, got {_show(function)}")
+        bad.append(f"{where}): function must be one of {kinds}, got {shown(function)}")
         return
     where = f"{where}, {function})"
     bad += _unknown_keys(where, rec, DRIVE_KEYS)
     if not isinstance(params, dict):
         bad.append(f"{where}: parameters must be an object; {function} takes {takes}; got "
-                   f"{_show(params)}")
+                   f"{shown(params)}")
         return
     unknown = [p for p in params if p not in fields]
     missing = [p for p in required if p not in params]
@@ -379,7 +373,7 @@ def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:
     except ModelError as exc:
         bad += [f"{where}: {p}" for p in exc.problems]
     except (TypeError, ValueError, ArithmeticError) as exc:
-        bad.append(f"{where}: parameters {_show(params)} rejected ({exc}); {function} takes "
+        bad.append(f"{where}: parameters {shown(params)} rejected ({exc}); {function} takes "
                    f"{takes}")
 
 

@@ -4,7 +4,8 @@ and the points of the three modes (grid, list, Latin-hypercube sample), the safe
 limits and the heat-map axes, each checked against a parameter space (an object with the
 methods name, check, is_integer and default: gpme_study.spec.CraneSpace,
 gpme_study.model_spec.ModelSpace).  gpme_study.sweep_spec chooses which description a dict
-is.
+is.  Validation is our own code, not a schema library, on purpose (docs/architecture.md,
+"Input validation").
 """
 import itertools
 import json

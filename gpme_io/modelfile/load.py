@@ -91,7 +91,8 @@ def _type_name(v: Any) -> str:
 
 
 class _Checker:
-    """Typed access to TOML tables, collecting 'key.path: message' problems."""
+    """Typed access to TOML tables, collecting 'key.path: message' problems.  Our own
+    checker, not a schema library, on purpose: docs/architecture.md, "Input validation"."""
 
     def __init__(self):
         self.problems: list = []
