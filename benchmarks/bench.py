@@ -40,7 +40,8 @@ import numpy as np
 import pandas as pd
 
 from gpme_io.atomic import atomic_save_figure, atomic_write_csv
-from gpme_core.compiled import for_system, single_threaded_blas
+from gpme_core.blas_threads import single_threaded_blas
+from gpme_core.compiled import for_system
 from gpme_core.constraints import SympyPointConstraint
 from gpme_core.errors import GpmeError
 from gpme_core.gpme import ProgrammedMotion

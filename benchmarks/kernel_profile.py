@@ -16,7 +16,7 @@ import timeit
 import numba
 import numpy as np
 
-from gpme_core import compiled, fast, kernels
+from gpme_core import blas_threads, compiled, fast, kernels
 from gpme_examples.crane import crane_system, initial_state
 
 BATCH = 400
@@ -93,7 +93,7 @@ def main(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
     args = parser.parse_args(argv)
-    with compiled.single_threaded_blas():      # as in the compiled runs
+    with blas_threads.single_threaded_blas():      # as in the compiled runs
         rows = [profile(n) for n in args.n_rfe]
     keys = list(rows[0])
     print("| " + " | ".join(keys) + " |")

@@ -12,9 +12,9 @@ import sys
 from pathlib import Path
 
 from gpme_examples.crane import build_crane
+from gpme_io.atomic import atomic_write_text
 from gpme_io.file_names import named_path
 
-from .reports.tables import atomic_write_text
 from gpme_io.urdf import side_file_path, side_file_text, urdf_documents
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

@@ -49,7 +49,9 @@ from .reports.index_page import write_index
 from .reports.junit import write_junit_xml
 from .reports.rows import check_name, normalise, other_rows, own_rows, write_rows
 from .reports.summary_md import write_summary_md
-from .reports.tables import atomic_write_text, summarise, write_csv
+from gpme_io.atomic import atomic_write_text
+
+from .reports.tables import summarise, write_csv
 from .run_checks import rows_frame, run_rows, run_warnings
 from .verify_meta import environment
 

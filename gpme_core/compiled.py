@@ -34,8 +34,6 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from . import fast, kernels
-# single_threaded_blas is gpme_core.blas_threads'; the benchmarks take it from here
-from .blas_threads import single_threaded_blas  # noqa: F401
 from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
                           SympyPointConstraint)
 from .errors import OutputWriteError

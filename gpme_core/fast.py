@@ -15,7 +15,7 @@ import numpy as np
 ENABLED = os.environ.get("GPME_NO_JIT", "") not in ("1", "true", "yes")
 
 try:
-    import numba
+    import numba  # noqa: F401 (is numba there: else the reference path)
 except ImportError:  # pragma: no cover - numba is a dependency; keep the reference path
     ENABLED = False
 

@@ -25,7 +25,7 @@ from . import transforms as tf
 from .dynamics import mass_matrix
 from .errors import ModelError
 from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
-from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE   # users import them from here
+from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE  # noqa: F401 (users import them here)
 from .rfem import discretise_beam
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)

@@ -88,8 +88,9 @@ def atomic_write_csv(df, path, significant_digits=None):
     if significant_digits is not None:
         spec = f"%.{int(significant_digits)}g"
 
-        def float_format(v):
+        def rounded(v):
             return repr(float(spec % v))
+        float_format = rounded
     text = df.to_csv(index=False, lineterminator="\n", float_format=float_format)
     if str(path).endswith(".gz"):
         atomic_write_bytes(path, gzip.compress(text.encode("utf-8"), compresslevel=9,

@@ -30,7 +30,7 @@ Drives are LoadCoordinate loads on q_k with a load user function returning the d
 force (N) or torque (N m) at Exudyn's time.  Gravity is the tree's own ``gravity``.
 """
 from dataclasses import dataclass
-from typing import Mapping, Optional, Sequence
+from typing import Mapping
 
 import exudyn as exu
 import numpy as np
@@ -97,7 +97,6 @@ class TreeLayout:
 
 def tree_layout(model) -> TreeLayout:
     """:class:`TreeLayout` of the gpme ``model`` (a serial chain: parent of k is k - 1)."""
-    n = model.n_coordinates
     types, idx, rots, jr, jo, masses, coms, inertias, unaligned = [], [], [], [], [], [], [], [], []
     x_parent = np.eye(3)
     for joint, link in zip(model.joints, model.links):

@@ -21,10 +21,10 @@ import sys
 from pathlib import Path
 
 from gpme_examples.crane import build_crane, crane_constraints, crane_system, initial_state
+from gpme_io.atomic import atomic_write_text
 
 from .mjcf import mjcf_text
 from .mechanism import MechanismSettings
-from ..reports.tables import atomic_write_text
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "models" / "mjcf"
 TIMESTEPS = {0: 1e-4, 1: 1e-4, 2: 2.5e-5, 3: 1e-5}   # s, by number of RFEM segments

@@ -10,7 +10,9 @@ from gpme_io.file_names import file_stem
 from ..compare import FAIL, INFO, row_status
 from ..reports.html import cite_reasons, engine_page, reason_refs, section, table
 from ..reports.rows import own_rows, write_rows
-from ..reports.tables import atomic_write_text, summarise, worst_first
+from gpme_io.atomic import atomic_write_text
+
+from ..reports.tables import summarise, worst_first
 
 TINY = 1e-18   # floor for log plots of differences
 MAX_PLOTTED = 5

@@ -25,7 +25,7 @@ from this side's data.  Pinocchio's joint frame after the motion is the gpme lin
 """
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Optional, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin

@@ -23,7 +23,6 @@ No gpme constraint, kinematics or dynamics code is called here.
 """
 import time
 from dataclasses import replace
-from typing import Optional
 
 import numpy as np
 import pandas as pd

@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 from markupsafe import Markup
 
+from gpme_io.atomic import atomic_write_text
 from gpme_io.example_outputs import PAPER_FIGURES
 from gpme_io.file_names import file_stem
 
@@ -23,7 +24,7 @@ from .html import render, table as html_table_data
 from .matrix import legend, matrix_blocks
 from .rows import CHECKS_DIR, TOLERANCES_FILE, check_id, slice_path
 from .run_diff import diff_lines, headline
-from .tables import atomic_write_text, checks_worst_first
+from .tables import checks_worst_first
 
 ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
                  "mujoco": "MuJoCo (terms and full runs)",

@@ -63,9 +63,10 @@ import pandas as pd
 
 from gpme_core.errors import GpmeError
 from gpme_io import file_names
+from gpme_io.atomic import atomic_write_bytes, atomic_write_text
 
 from ..compare import row_status
-from .tables import atomic_write_bytes, atomic_write_text, worst_status
+from .tables import worst_status
 
 TERMS_SECTION = "terms"     # the section of rows an engine gave none (Pinocchio's terms)
 CHECKS_DIR = "checks"

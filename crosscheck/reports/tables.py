@@ -8,7 +8,7 @@ one was.  The HTML itself, a table's too (html_table), comes from templates
 import numpy as np
 import pandas as pd
 
-from gpme_io.atomic import atomic_write_bytes, atomic_write_csv, atomic_write_text  # noqa: F401
+from gpme_io.atomic import atomic_write_csv
 
 from ..compare import FAIL, INFO, PASS, STATUSES, row_status
 

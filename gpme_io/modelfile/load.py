@@ -7,12 +7,11 @@ that need the built model (joint, frame and link names, coordinate counts) are d
 gpme_io.modelfile.build and listed with these (gpme_io.modelfile.load_model_file).
 docs/models.md describes the format.
 """
-import dataclasses
 import importlib.metadata
 import math
 import tomllib
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 import numpy as np
 

@@ -14,7 +14,7 @@ from typing import Mapping, Optional, Union
 import sympy as sp
 
 from gpme_core.time_functions import TimeFunction
-from gpme_io.scenario import ToleranceOverride
+from gpme_io.scenario import EngineStep, ToleranceOverride
 
 BUILTIN_MODELS = ("crane",)
 SECTION_SHAPES = {"circle": ("diameter",), "tube": ("outer_diameter", "wall_thickness"),
@@ -245,5 +245,5 @@ class ModelFile:
     def tolerance_map(self) -> Mapping[str, ToleranceOverride]:
         return {t.check: t for t in self.tolerances}
 
-    def engine_step_map(self) -> Mapping[str, "EngineStep"]:
+    def engine_step_map(self) -> Mapping[str, EngineStep]:
         return {s.engine: s for s in self.engine_steps}
