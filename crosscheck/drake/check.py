@@ -57,10 +57,10 @@ from tqdm import tqdm
 from gpme_core.errors import GpmeError, SimulationError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics, point_kinematics
+from gpme_io.atomic import atomic_write_text
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
-from ..reports import tables as report
 from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..states import FULL, QUICK, scenario_states
@@ -394,7 +394,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
-    report.atomic_write_text(out_dir / "drake.html", _html(df, records, wall, quick))
+    atomic_write_text(out_dir / "drake.html", _html(df, records, wall, quick))
     return df
 
 

@@ -31,10 +31,10 @@ import pinocchio as pin
 from tqdm import tqdm
 
 from gpme_core.errors import GpmeError
+from gpme_io.atomic import atomic_write_text
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
-from ..reports import tables as report
 from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..sampling import state_ranges
@@ -149,7 +149,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
-    report.atomic_write_text(out_dir / "exudyn.html", _html(df, timings, wall, quick))
+    atomic_write_text(out_dir / "exudyn.html", _html(df, timings, wall, quick))
     return df
 
 

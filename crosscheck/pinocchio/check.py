@@ -49,6 +49,7 @@ from tqdm import tqdm
 from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics, point_kinematics
+from gpme_io.atomic import atomic_write_text
 from gpme_io.file_names import named_path
 from gpme_io.urdf import read_urdf, write_urdf
 from gpme_io.urdf_reader import with_link_frames
@@ -57,7 +58,6 @@ from gpme_io.urdf_writer import link_own_frame
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..constraint_reference import evaluate_reference, reference_constraints
-from ..reports import tables as report
 from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..states import FULL, QUICK, State, scenario_states
@@ -395,7 +395,7 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
-    report.atomic_write_text(out_dir / "pinocchio.html",
+    atomic_write_text(out_dir / "pinocchio.html",
                              _html(df, records, skipped, wall, quick))
     return df
 
