@@ -90,6 +90,30 @@ def run_rows(scenario, df, tolerances=None):
     rows.append(row)
     rows += smoothness_rows(scenario, df, case)
     rows += elastic_rows(scenario, df, case)
+    rows += inertia_rows(scenario, case)
+    return rows
+
+
+def inertia_rows(scenario, case):
+    """Information rows of the links whose inertia breaks the triangle inequality of a
+    physical body (accepted, as Pinocchio accepts it; gpme_core.inertia): the excess
+    I3 - (I1 + I2) in kg m^2, the moments in the reason.  The run finishing is the check
+    that matters: its reduced solve stops the run where the mass matrix is not positive
+    definite."""
+    rows = []
+    for link in scenario.model.links:
+        if link.inertia is None or not link.inertia.triangle_excess():
+            continue
+        excess = link.inertia.triangle_excess()
+        moments = np.linalg.eigvalsh(link.inertia.inertia_array)
+        row = compare("gpme", scenario.name, f"non-physical inertia ({link.name})", case,
+                      excess, excess, Tolerance(np.inf, 0.0, (
+                          f"information: kg m^2, I3 - (I1 + I2) of the principal moments "
+                          f"{[float(f'{m:.4g}') for m in moments]} kg m^2 (a physical body has "
+                          "I1 + I2 >= I3); accepted as Pinocchio accepts it, the mass matrix "
+                          "stayed positive definite along the run")))
+        row.update(entry=f"link {link.name}")
+        rows.append(row)
     return rows
 
 

@@ -303,6 +303,7 @@ def _check_record(r):
             "model": r["model"], "quantity": r["quantity"], "n_compared": int(r["n_compared"]),
             "n_fail": int(r["n_fail"]),
             "worst_abs_error": _num(r["worst_abs_error"]),
+            "value": _num(r["value"]) if check_status(r) == "info" else None,
             "worst_rel_error": _num(r["worst_rel_error"]),
             "worst_case": _text(r["worst_case"]), "worst_entry": _text(r["worst_entry"]),
             "tol_abs": _num(r["tol_abs"]), "tol_rel": _num(r["tol_rel"]),

@@ -5,7 +5,7 @@ Every library module reports what it is doing through a logger under "gpme"
 and never prints: as a library (tests, notebooks, a user's script) it is silent unless the
 caller configures logging.  The `gpme` command configures it once, here: records of INFO
 and above under "gpme" go to standard output as their message alone (the lines the
-commands have always printed), warnings prefixed "WARNING".
+commands have always printed), warnings prefixed "WARNING", Python warnings too.
 
 Kept as direct prints, on purpose: a command's own result lines and its "error:" line
 (gpme/cli.py, gpme_study/command.py, the generators' ``__main__``: the command's output,
@@ -14,6 +14,7 @@ budget.py's estimate lines): they draw on a terminal, which is their job.
 """
 import logging
 import sys
+import warnings
 
 ROOT_LOGGER = "gpme"
 
@@ -40,9 +41,18 @@ class _MessageFormatter(logging.Formatter):
         return f"WARNING {text}" if record.levelno >= logging.WARNING else text
 
 
+def _warning_line(message, category, filename, lineno, file=None, line=None):
+    """warnings.showwarning for the command: a Python warning (an accepted non-physical
+    inertia, a suspicious beam section, a library's deprecation) as one 'WARNING <message>'
+    line, not the file, line and source of the warnings module's default."""
+    logging.getLogger(f"{ROOT_LOGGER}.warnings").warning(f"{message} ({category.__name__})")
+
+
 def configure(level: int = logging.INFO) -> logging.Logger:
     """Show the "gpme" loggers' records of ``level`` and above on standard output, once
-    per process (a second call only sets the level); returns the "gpme" logger."""
+    per process (a second call only sets the level), and Python warnings as such lines;
+    returns the "gpme" logger."""
+    warnings.showwarning = _warning_line
     logger = logging.getLogger(ROOT_LOGGER)
     if not any(isinstance(h, _CurrentStdout) for h in logger.handlers):
         handler = _CurrentStdout()

@@ -60,6 +60,25 @@ def _print_problems(problems):
               "\n".join(f"  - {p}" for p in problems), file=sys.stderr)
 
 
+def _number(v):
+    return "-" if v is None or v != v else f"{v:.3e}"
+
+
+def terminal_table(summary, status):
+    """The check table `gpme verify` prints: per check its status, the worst absolute and
+    relative error and the tolerance they are judged by; an information check shows its
+    value instead (its error is 0 by construction) and no tolerance."""
+    info = status == "info"
+    return pd.DataFrame({
+        "engine": summary["engine"], "section": summary["section"], "model": summary["model"],
+        "quantity": summary["quantity"], "n": summary["n_compared"],
+        "worst |error|": [f"value {_number(v)}" if i else _number(e) for i, e, v in
+                          zip(info, summary["worst_abs_error"], summary["value"])],
+        "rel error": ["-" if i else _number(e) for i, e in zip(info, summary["worst_rel_error"])],
+        "tolerance": ["-" if i else _number(t) for i, t in zip(info, summary["tolerance"])],
+        "status": status})
+
+
 def main(args, problems=()):
     """`gpme verify`: ``problems`` found by the caller (--out, --keep) are listed with the
     report flags' and the model files' in one message (exit 2)."""
@@ -88,11 +107,9 @@ def main(args, problems=()):
                                      keep=getattr(args, "keep", None),
                                      max_wall_s=wall_limit(getattr(args, "force", False)),
                                      compare_to=getattr(args, "compare_to", None))
-    cols = ["engine", "section", "model", "quantity", "n_compared", "worst_abs_error",
-            "worst_rel_error", "status"]
     status = summary.apply(verify.check_status, axis=1)
-    with pd.option_context("display.width", 200, "display.max_rows", 500):
-        print(summary.assign(status=status)[cols].to_string(index=False))
+    with pd.option_context("display.width", 250, "display.max_rows", 500):
+        print(terminal_table(summary, status).to_string(index=False))
     n_fail = int(verify.failed_checks(summary).sum())
     n_pass, n_info = int((status == "pass").sum()), int((status == "info").sum())
     document = strict_json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))

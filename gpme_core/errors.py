@@ -41,6 +41,11 @@ class SimulationError(GpmeError):
     """A run diverged or produced non-finite values."""
 
 
+class InertiaWarning(UserWarning):
+    """A body's inertia is accepted but not physical (its principal moments break the
+    triangle inequality I1 + I2 >= I3); the message names the link and the moments."""
+
+
 class SectionWarning(UserWarning):
     """A beam's section constants are legal but suspicious (e.g. a circle's torsion constant
     J = I_y + I_z on a section with I_y != I_z); the message gives the values."""

@@ -35,8 +35,13 @@ class RigidBodyInertia:
               is a pure rotational inertia, e.g. a rotor whose mass is counted elsewhere)
     com     : (3,) m, centre of mass in the body frame
     inertia : (3, 3) kg m^2, about the centre of mass, body axes; symmetric positive
-              semi-definite (zero for a point mass, one zero moment for a thin rod) and
-              satisfying the triangle inequalities I1 + I2 >= I3 of a real body.
+              semi-definite (zero for a point mass, one zero moment for a thin rod).  A
+              real body also has I1 + I2 >= I3 (the triangle inequality of its principal
+              moments); a tensor that breaks it is accepted, as Pinocchio accepts it
+              (robot descriptions carry such CAD round-off), and said by
+              :meth:`non_physical`: what matters to the dynamics is that the chain's mass
+              matrix is positive definite, which the model checks at its start and every
+              run's reduced solve along the run.
 
     Whether a chain of such bodies can move is the mass matrix's business: a point mass on
     the axis of its own revolute joint gives a singular M, which gpme_core.model's
@@ -85,10 +90,28 @@ class RigidBodyInertia:
             out.append(f"{label}: inertia tensor must be positive definite or semi-definite "
                        f"(no negative principal moment), got principal moments {eig.tolist()} "
                        "kg m^2")
-        elif eig[0] + eig[1] < eig[2] - tol:
-            out.append(f"{label}: principal moments {eig.tolist()} kg m^2 violate the triangle "
-                       "inequality I1 + I2 >= I3 of a physical body")
         return out
+
+    def triangle_excess(self):
+        """kg m^2: I3 - (I1 + I2) of the principal moments I1 <= I2 <= I3 beyond round-off
+        (the inertia checks' tolerance), 0.0 for a tensor a physical body can have."""
+        eig = np.linalg.eigvalsh(self.inertia_array)
+        m = self.mass
+        tol = max(_INERTIA_TOL * abs(eig).max(), m * POINT_SIZE ** 2 if m > 0 else 0.0)
+        excess = float(eig[2] - eig[0] - eig[1])
+        return excess if excess > tol else 0.0
+
+    def non_physical(self, label):
+        """What is not physical about this (valid) inertia, accepted all the same: the
+        principal moments breaking the triangle inequality I1 + I2 >= I3.  [] or one line
+        starting with ``label``."""
+        if self.problems(label) or self.triangle_excess() == 0.0:
+            return []
+        eig = np.linalg.eigvalsh(self.inertia_array)
+        return [f"{label}: principal moments {[float(f'{e:.4g}') for e in eig]} kg m^2 break "
+                f"the triangle inequality I1 + I2 >= I3 of a physical body (I3 exceeds I1 + I2 "
+                f"by {self.triangle_excess():.3g} kg m^2); accepted, as Pinocchio accepts it: "
+                "the mass matrix is checked positive definite instead"]
 
     def pseudo_inertia(self):
         """(4, 4) kg m^2 / kg m / kg pseudo-inertia H in the body frame."""
@@ -149,7 +172,7 @@ def cylinder(mass, radius, length, axis=2, com=(0.0, 0.0, 0.0), inner_radius=0.0
 
 def check_pseudo_inertia(h, label="H"):
     """Raise ModelError unless h is a (4, 4) pseudo-inertia of a physical body (mass >= 0,
-    I_C positive semi-definite with the triangle inequalities)."""
+    I_C positive semi-definite; the triangle inequality is RigidBodyInertia.non_physical's)."""
     h = np.asarray(h, dtype=float)
     if h.shape != (4, 4):
         raise ModelError(f"{label}: expected shape (4, 4), got {h.shape}")

@@ -15,6 +15,7 @@ A model is built once by :class:`ChainBuilder`, validated once (every problem in
 :class:`ModelError`), and immutable.  The state (t, q, q_dot) is passed in and out as
 arrays ordered as ``model.coordinate_names``.
 """
+import warnings
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Callable, Optional
@@ -23,7 +24,7 @@ import numpy as np
 
 from . import transforms as tf
 from .dynamics import mass_matrix
-from .errors import ModelError
+from .errors import InertiaWarning, ModelError
 from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
 from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE  # noqa: F401 (users import them here)
 from .rfem import discretise_beam
@@ -208,6 +209,13 @@ class Model:
         """Names of the RFEM coordinates (psi, theta, phi of every sde), in model order."""
         idx = sorted(k for f in self.flexible_links for k in f.joint_indices)
         return tuple(self.coordinate_names[k] for k in idx)
+
+    def non_physical_inertias(self):
+        """One line per link whose (lumped) inertia breaks the triangle inequality of a
+        physical body (gpme_core.inertia.RigidBodyInertia.non_physical): accepted, as
+        Pinocchio accepts it, and said in the reports; [] for a physical model."""
+        return [line for lk in self.links if lk.inertia is not None
+                for line in lk.inertia.non_physical(f"link {lk.name!r}")]
 
     @property
     def total_mass(self):
@@ -395,9 +403,12 @@ class ChainBuilder:
         if not self._joints:
             raise ModelError("add a joint before attaching a body: bodies fixed to the world "
                              "do not move and have no effect on the dynamics")
-        problems = inertia.problems(f"body on link {self._link_names[-1]!r}")
+        label = f"body on link {self._link_names[-1]!r}"
+        problems = inertia.problems(label)
         if problems:
             raise ModelError(problems)
+        for line in inertia.non_physical(label):
+            warnings.warn(line, InertiaWarning, stacklevel=2)
         x = self._pending_origin if origin is None else self._pending_origin @ np.asarray(origin, float)
         h = transform_pseudo_inertia(x, inertia.pseudo_inertia())
         self._link_parts[-1].append(inertia if np.array_equal(x, np.eye(4)) else None)

@@ -85,7 +85,8 @@ def test_validity_checks_at_their_boundaries():
     of 1e-13 of the largest (round-off of a rotated tensor; the tolerance is 1e-12 of it).
     Rejected:
     negative or non-finite mass, non-finite or mis-shaped com/tensor, asymmetric tensor,
-    a negative moment, the triangle inequality broken by 1 %."""
+    a negative moment.  Accepted but said non-physical (issue 28: as Pinocchio accepts it):
+    the triangle inequality broken by 1 %; the plate at equality is physical."""
     ok = [RigidBodyInertia(0.0), RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.0])),
           RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.0, 1.0, 1.0])),
           RigidBodyInertia(1.0, (0, 0, 0), np.diag([-1e-35, 0.0, 0.0])),
@@ -96,7 +97,7 @@ def test_validity_checks_at_their_boundaries():
           # symmetric to round-off only (off-diagonals differ by 1e-13 relative)
           RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.1 * (1 + 1e-13), 1, 0], [0, 0, 1]])]
     for body in ok:
-        assert body.problems("b") == [], body
+        assert body.problems("b") == [] and body.non_physical("b") == [], body
     bad = {"mass must be": RigidBodyInertia(-1.0), "mass must be ": RigidBodyInertia(float("nan")),
            "centre of mass": RigidBodyInertia(1.0, (0, np.inf, 0)),
            "centre of mass ": RigidBodyInertia(1.0, (0, 0)),
@@ -107,13 +108,16 @@ def test_validity_checks_at_their_boundaries():
            " negative principal": RigidBodyInertia(0.0, (0, 0, 0), np.diag([-0.5, 1.0, 1.0])),
            "symmetric": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]),
            "symmetric ": RigidBodyInertia(1.0, (0, 0, 0), [[1, 0.1, 0], [0.15, 1, 0], [0, 0, 1]]),
-           "negative principal": RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.01, 1.0, 1.0])),
-           "triangle": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.02])),
-           # smallest + middle < largest with all three different: 0.5 + 1.0 < 1.6
-           "triangle ": RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.6, 0.5, 1.0]))}
+           "negative principal": RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.01, 1.0, 1.0]))}
     for msg, body in bad.items():
         p = body.problems("b")
         assert len(p) >= 1 and msg.strip() in " ".join(p), (msg, p)
+    # the triangle broken by 1 %, and with three different moments (0.5 + 1.0 < 1.6)
+    for body, excess in ((RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.02])), 0.02),
+                         (RigidBodyInertia(1.0, (0, 0, 0), np.diag([1.6, 0.5, 1.0])), 0.1)):
+        assert body.problems("b") == []
+        assert "triangle inequality" in body.non_physical("b")[0]
+        assert body.triangle_excess() == pytest.approx(excess, rel=1e-12)
     # a negative moment of a point mass just above the 1 um threshold is rejected
     assert RigidBodyInertia(1.0, (0, 0, 0), np.diag([-2e-12, 0, 0])).problems("b")
 
@@ -129,15 +133,17 @@ def test_defaults_and_immutability():
 
 
 def test_check_pseudo_inertia_raises_on_unphysical_h():
-    """check_pseudo_inertia: wrong shape and an H whose I_C breaks the triangle inequality
-    raise ModelError; the H of a real box passes."""
+    """check_pseudo_inertia: wrong shape and an H whose I_C has a negative principal moment
+    raise ModelError; the H of a real box passes, and so does one whose I_C only breaks the
+    triangle inequality (accepted, as Pinocchio accepts it: RigidBodyInertia.non_physical)."""
     check_pseudo_inertia(cuboid(2.0, (0.1, 0.2, 0.3), com=(0.1, 0, 0)).pseudo_inertia())
     with pytest.raises(ModelError, match="shape"):
         check_pseudo_inertia(np.eye(3))
     with pytest.raises(ModelError, match="shape"):
         check_pseudo_inertia(np.eye(5))
-    with pytest.raises(ModelError, match="triangle"):
-        check_pseudo_inertia(pseudo_inertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.5])))
+    check_pseudo_inertia(pseudo_inertia(1.0, (0, 0, 0), np.diag([1.0, 1.0, 2.5])))
+    with pytest.raises(ModelError, match="negative principal moment"):
+        check_pseudo_inertia(pseudo_inertia(1.0, (0, 0, 0), np.diag([-0.5, 1.0, 2.5])))
 
 
 def test_check_pseudo_inertia_rejects_a_negative_mass():

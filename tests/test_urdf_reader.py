@@ -160,9 +160,18 @@ def test_inertia_checks_accept_psd_and_reject_the_unphysical():
     assert not RigidBodyInertia(1.0, (0, 0, 0), np.zeros((3, 3))).problems("p")
     assert not RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.0, 1.0, 1.0])).problems("rod")
     assert not RigidBodyInertia(0.0, (0, 0, 0), np.zeros((3, 3))).problems("none")
-    bad = RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.1, 0.1, 0.3])).problems("link 'x'")
-    assert bad == ["link 'x': principal moments [0.1, 0.1, 0.3] kg m^2 violate the triangle "
-                   "inequality I1 + I2 >= I3 of a physical body"]
+    # the triangle inequality broken (0.1 + 0.1 < 0.3): accepted as Pinocchio accepts it,
+    # said by non_physical with the excess I3 - I1 - I2 = 0.1 kg m^2
+    cad = RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.1, 0.1, 0.3]))
+    assert not cad.problems("link 'x'")
+    assert cad.triangle_excess() == pytest.approx(0.1, rel=1e-12)
+    assert cad.non_physical("link 'x'") == [
+        "link 'x': principal moments [0.1, 0.1, 0.3] kg m^2 break the triangle inequality "
+        "I1 + I2 >= I3 of a physical body (I3 exceeds I1 + I2 by 0.1 kg m^2); accepted, as "
+        "Pinocchio accepts it: the mass matrix is checked positive definite instead"]
+    # equality (a thin disc, I3 = I1 + I2) and round-off above it are physical
+    assert not RigidBodyInertia(1.0, (0, 0, 0), np.diag([0.1, 0.1, 0.2 + 1e-15])
+                                ).non_physical("disc")
     bad = RigidBodyInertia(1.0, (0, 0, 0), np.diag([-0.1, 0.2, 0.2])).problems("link 'y'")
     assert "inertia tensor must be positive definite or semi-definite" in bad[0]
     assert "[-0.1, 0.2, 0.2]" in bad[0]
@@ -452,6 +461,51 @@ REAL = [
     ("baxter_description/urdf/baxter.urdf", ("base", "left_gripper"), None),
     ("human_description/robots/human.urdf", ("middle_pelvis", "right_hand"), None),
 ]
+
+
+# descriptions whose moving links' inertias break the triangle inequality (CAD round-off):
+# accepted as Pinocchio accepts them (issue 28), each with its note and warning naming the
+# links, and their terms must then agree with Pinocchio's as any other's
+NON_PHYSICAL = [
+    ("hyq_description/robots/hyq_no_sensors.urdf", ("base_link", "lf_foot"), None,
+     ["lf_foot"]),
+    ("allegro_hand_description/urdf/allegro_right_hand.urdf", ("palm_link", "link_3.0"), None,
+     ["link_3.0"]),
+    ("allegro_hand_description/urdf/allegro_left_hand.urdf", ("palm_link", "link_7.0"), None,
+     ["link_7.0"]),
+    ("romeo_description/urdf/romeo_small.urdf", ("base_link", "r_wrist"), None,
+     ["RShoulderYawLink"]),
+    ("pr2_description/urdf/pr2.urdf", ("base_footprint", "head_tilt_link"), None,
+     ["sensor_mount_link"]),
+]
+
+
+@pytest.mark.parametrize("rel, chain, frozen, links", NON_PHYSICAL,
+                         ids=[Path(r[0]).stem + "-" + r[1][1] for r in NON_PHYSICAL])
+def test_real_robot_with_non_physical_inertias_is_read_as_pinocchio_reads_it(rel, chain,
+                                                                             frozen, links):
+    from gpme_core.errors import InertiaWarning
+    path = ROBOTS / rel
+    if not path.exists():
+        pytest.skip(f"example-robot-data not installed ({path} missing)")
+    with pytest.warns(InertiaWarning, match="break the triangle inequality"):
+        res = load_urdf(path, side_file=None, chain=chain, frozen=frozen)
+    note = [n for n in res.notes if n.startswith("non-physical inertias of moving links")]
+    assert note and all(f"link {link!r}" in note[0] for link in links), res.notes
+    worst = _worst_against_pinocchio(path, res, seed=sum(map(ord, rel)) % 1000)
+    assert np.all(worst <= REL), dict(zip("Mgh", worst))
+
+
+def test_a_negative_principal_moment_is_still_refused():
+    """romeo_laas_small's 'body' has a negative principal moment (-0.0213 kg m^2): not a
+    body at all, refused with the moments (Pinocchio takes it silently)."""
+    path = ROBOTS / "romeo_description/urdf/romeo_laas_small.urdf"
+    if not path.exists():
+        pytest.skip(f"example-robot-data not installed ({path} missing)")
+    with pytest.raises(ModelFileError, match=r"(?s)link 'body' <inertial>: inertia tensor "
+                                             r"must be positive definite or semi-definite"
+                                             r".*\[-0\.0213"):
+        load_urdf(path, side_file=None)
 
 
 @pytest.mark.parametrize("rel, chain, frozen", REAL, ids=[Path(r[0]).stem for r in REAL])

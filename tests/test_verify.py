@@ -40,6 +40,12 @@ def test_run_directory_and_latest(report):
         assert (run_dir / name).is_file(), name
     data = json.loads((run_dir / "summary.json").read_text())
     assert len(data["checks"]) == len(summary)
+    # an information check carries its value (issue 28: a smallest singular value of
+    # 0.247 is not "an error 0"); a gated one has none
+    sigma = [c for c in data["checks"] if c["quantity"].startswith("smallest singular value")]
+    assert sigma and all(c["status"] == "info" and c["value"] > 0 for c in sigma)
+    assert all(c["value"] is None for c in data["checks"] if c["status"] != "info")
+    assert "value " in (run_dir / "index.html").read_text()
     assert {"name", "engine", "model", "quantity", "worst_abs_error", "tol_abs", "tol_rel",
             "status"} <= set(data["checks"][0])
     assert data["run"]["versions"]["mujoco"] and data["run"]["git_commit"]

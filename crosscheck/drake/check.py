@@ -59,6 +59,7 @@ from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 from gpme_io.atomic import atomic_write_text
 
+from .. import inertia_gate
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
 from ..reports.html import comparison_page, section, table
@@ -373,6 +374,14 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     frames, records = [], []
     bar = _progress(progress, len(scenarios))
     for scenario in scenarios:
+        refused = inertia_gate.refusal(ENGINE, scenario)
+        if refused:
+            log.info("%s: %s", scenario.name, refused)
+            frames.append(pd.DataFrame([{**inertia_gate.refusal_row(ENGINE, scenario, refused),
+                                         "section": "terms"}]))
+            if bar:
+                bar.update()
+            continue
         if "terms" in sections:
             try:
                 df, record = terms_section(scenario, out_dir, plan)

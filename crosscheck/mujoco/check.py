@@ -32,7 +32,7 @@ from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate
 from gpme_io.runs import resolved_step
 
-from .. import run_gates
+from .. import inertia_gate, run_gates
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from . import cases
@@ -255,6 +255,12 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
 
     plots, rows, tables = {}, [], []
     for s in scenarios:
+        refused = inertia_gate.refusal(ENGINE, s)
+        if refused:
+            log(f"{s.name}: {refused}")
+            rows += _tag([inertia_gate.refusal_row(ENGINE, s, refused)], "terms", "all",
+                         "not compared")
+            continue
         rows += terms_section(s, p, log)
         skip = run_gates.over_budget(p.t_end(s), _dt(s))
         if skip:

@@ -155,8 +155,11 @@ def _engines(run_dir, summary, spreads, reason_ids):
                     "id": check_id(r["check"]), "status": r["status"],
                     "section": r["section"], "quantity": r["quantity"],
                     "n_compared": int(r["n_compared"]),
-                    "abs_error": _fmt(r["worst_abs_error"]),
-                    "rel_error": _fmt(r["worst_rel_error"]),
+                    # an information check reports its value (its "error" is 0 by
+                    # construction: a smallest singular value of 0.247 is not an error 0)
+                    "abs_error": (f"value {_fmt(r['value'])}" if r["status"] == INFO
+                                  else _fmt(r["worst_abs_error"])),
+                    "rel_error": "-" if r["status"] == INFO else _fmt(r["worst_rel_error"]),
                     "ratio": "info" if r["status"] == INFO else _fmt(r["error_over_tolerance"]),
                     "tolerance": _fmt(r["tolerance"]),
                     "reason": r["reason"], "reason_id": reason_ids[r["reason"]],

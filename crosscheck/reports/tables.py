@@ -51,7 +51,8 @@ def worst_status(statuses):
 def summarise(df, keys=("engine", "model", "quantity")):
     """One row per group of ``keys``: worst errors, the worst row's tolerance and reason,
     the group's status (:func:`worst_status`; ``passed`` = status != "fail") and the
-    counts n_compared, n_pass, n_fail, n_info."""
+    counts n_compared, n_pass, n_fail, n_info; ``value``: gpme's value in the worst row
+    (what an information check reports: its error is 0 by construction)."""
     rows = []
     df = df.assign(status=row_status(df))
     for key, g in df.groupby(list(keys), sort=False, dropna=False):
@@ -64,6 +65,7 @@ def summarise(df, keys=("engine", "model", "quantity")):
                      "n_info": int(counts.get(INFO, 0)),
                      "worst_abs_error": g["abs_error"].max(),
                      "worst_rel_error": g["rel_error"].max(),
+                     "value": w["gpme_value"] if "gpme_value" in w else np.nan,
                      "worst_case": w["case"], "worst_entry": w["entry"],
                      "tol_abs": w["tol_abs"], "tol_rel": w["tol_rel"],
                      "status": st, "passed": st != FAIL, "reason": w["reason"]})

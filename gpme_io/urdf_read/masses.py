@@ -26,6 +26,11 @@ def _inertial_problems(parsed, placement, problems, notes) -> list:
         notes.line("invalid <inertial> on links fixed to the world ignored (they do not move, "
                    "their mass is dropped): " + "; ".join(
                        p for lk in world_fixed_bad for p in parsed.bad_inertia[lk]))
+    non_physical = [line for lk, inertia in parsed.inertias.items()
+                    if inertia is not None and owner.get(lk) != _WORLD
+                    for line in inertia.non_physical(f"link {lk!r} <inertial>")]
+    if non_physical:
+        notes.line("non-physical inertias of moving links accepted: " + "; ".join(non_physical))
     return world_fixed_bad
 
 
