@@ -8,7 +8,18 @@ operating system releases it when the process ends, however it ends (no stale lo
 kill).  The holder (pid, host, start time) is written beside it in <dir>/.gpme.lock.holder
 for the message of the one refused (not into the lock file itself: a refused FileLock may
 truncate it).  Whoever takes the lock removes the temporary files (``.*.tmp``,
-gpme_io.atomic) that a killed writer left at the top of the directory."""
+gpme_io.atomic) that a killed writer left at the top of the directory.
+
+The holder removes both files when it is done, so a finished run leaves no ``.gpme.lock``
+in the user's folder.  Removing a lock file is safe only with a check on the taker's side,
+which this module adds to filelock's: a process that opened the file just before the holder
+removed it can lock the removed file once the holder lets go, while a third process creates
+and locks a new one; so whoever takes the lock checks that the path still names the file it
+locked (same inode) and otherwise lets go and takes the new one.  (The check reads
+filelock's open descriptor, ``_context.lock_file_fd``, stable across filelock 3 and 4; when
+it is not there, or on Windows where an open file cannot be removed, the files stay as
+before.)  A killed holder still leaves them: the operating system releases the lock, and the
+next run takes it and removes them when it finishes."""
 import contextlib
 import json
 import os
@@ -44,23 +55,64 @@ def _lock(path):
                     preserve_lock_file=True, fallback_to_soft=False)
 
 
+# takes of a lock that turned out to be on a removed file before giving up (each means
+# that another holder finished in between: more than a few is not a race but a bug)
+MAX_TAKES = 5
+
+
+def _locked_inode(lock):
+    """The inode of the file ``lock`` holds, or None when filelock does not say."""
+    fd = getattr(getattr(lock, "_context", None), "lock_file_fd", None)
+    try:
+        return os.fstat(fd).st_ino if isinstance(fd, int) else None
+    except OSError:
+        return None
+
+
+def _names_file(path, inode):
+    """Whether ``path`` is (still) the file of ``inode``."""
+    try:
+        return os.stat(path).st_ino == inode
+    except OSError:
+        return False
+
+
+def _take(path, directory, flag):
+    """(the FileLock held, the inode it holds or None): taken without waiting; retaken when
+    the file it locked was removed by a holder that finished in between."""
+    for _ in range(MAX_TAKES):
+        lock = _lock(path)
+        try:
+            lock.acquire(timeout=0)
+        except Timeout:
+            raise OutputBusyError(_busy_message(directory, flag)) from None
+        inode = _locked_inode(lock)
+        if inode is None or _names_file(path, inode):
+            return lock, inode
+        lock.release()                  # a removed file: the path has a new one now
+    raise OutputBusyError(f"{flag} {str(directory)!r}: its lock file was replaced {MAX_TAKES} "
+                          "times while being taken; another gpme run is starting and "
+                          "finishing there, try again")
+
+
 @contextlib.contextmanager
 def exclusive_output(directory, flag="--out"):
     """Hold the lock of ``directory`` (made if missing) for the ``with`` block; raises
-    OutputBusyError naming the holder when another process holds it."""
+    OutputBusyError naming the holder when another process holds it.  The lock and holder
+    files are removed when the block ends (see the module docstring)."""
     path = Path(directory) / LOCK_NAME
     path.parent.mkdir(parents=True, exist_ok=True)
-    lock = _lock(path)
-    try:
-        lock.acquire(timeout=0)
-    except Timeout:
-        raise OutputBusyError(_busy_message(directory, flag)) from None
+    lock, inode = _take(path, directory, flag)
     try:
         for stale in Path(directory).glob(".*.tmp"):      # gpme_io.atomic's temporary
             stale.unlink(missing_ok=True)   # files of a killed writer: no writer is alive now
         _write_holder(Path(directory) / HOLDER_NAME)
         yield
     finally:
+        if inode is not None:           # removed while still held: see the docstring
+            for name in (HOLDER_NAME, LOCK_NAME):
+                with contextlib.suppress(OSError):
+                    (Path(directory) / name).unlink(missing_ok=True)
         lock.release()
 
 
