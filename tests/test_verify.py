@@ -129,7 +129,7 @@ def test_first_run_says_there_is_nothing_to_compare(report):
     _, run_dir, _, _ = report
     diff = json.loads((run_dir / "summary.json").read_text())["diff"]
     assert diff["previous"] is None and "no previous run in" in diff["note"]
-    assert "Since the previous run" in (run_dir / "index.html").read_text()
+    assert "Against the run before this one" in (run_dir / "index.html").read_text()
 
 
 def test_unreadable_previous_report_is_one_line_not_a_crash(report, monkeypatch, tmp_path):
@@ -215,9 +215,11 @@ def test_diff_of_two_consecutive_runs(two_runs):
     # the same model, code and machine: the run is deterministic, nothing grew or changed
     assert (diff["grown"], diff["status_changed"], diff["new"], diff["vanished"],
             diff["versions_changed"], diff["mode_changed"]) == ([], [], [], [], {}, [])
-    assert f"since {runs[0]} ({diff['compared']} checks compared): 0 check(s) with " \
-           "error/tolerance grown >10x" in second.stdout
-    assert "Since the previous run" in (out / "r.md").read_text()
+    # the run compared with is named with its date (the page is read later, when other
+    # runs have come since: "the previous run" would then be another one)
+    assert f"against {runs[0]} ({diff['previous']['date_utc']}, {diff['compared']} checks " \
+           "compared): 0 check(s) with error/tolerance grown >10x" in second.stdout
+    assert "Against the run before this one" in (out / "r.md").read_text()
     page = (root / runs[1] / "index.html").read_text()
     assert '<section id="diff">' in page and runs[0] in page
     for check in data["checks"]:            # every gated check has its ratio, information none

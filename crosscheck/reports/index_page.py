@@ -61,7 +61,7 @@ def _fmt(v, digits=3):
 
 
 def diff_section(diff):
-    """The "since the previous run" section (HTML) of summary.json's ``diff``
+    """The "against the run before this one" section (HTML) of summary.json's ``diff``
     (crosscheck.reports.run_diff): one headline, then the lists, each capped, and the
     definition of the measure folded."""
     if not diff:
@@ -102,8 +102,12 @@ def _verdict(summary, rows, meta, diff):
                 + (f"{n_fail} FAILED" if n_fail else "none failed"))
         engines.append({"engine": engine, "n_fail": n_fail, "text": text})
     if diff and diff.get("previous") is not None:
+        # named with its date, not "the previous run": the page is read long after, when
+        # other runs have come since
+        prev = diff["previous"]
+        when = f" of {prev['date_utc']}" if prev.get("date_utc") else ""
         changes = headline(diff).split(": ", 1)[-1]
-        changes = f"{changes} (against {diff['previous'].get('run_id') or diff['previous'].get('source')})"
+        changes = f"{changes} (against run {prev.get('run_id') or prev.get('source')}{when})"
     else:
         changes = (diff or {}).get("note") or "no previous run to compare with"
     mode = "quick (CI-sized)" if meta.get("quick") else "full"

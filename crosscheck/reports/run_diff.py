@@ -214,8 +214,9 @@ def headline(diff: Mapping[str, Any]) -> str:
              f"{len(diff['status_changed'])} status change(s)",
              f"{len(diff['new'])} new", f"{len(diff['vanished'])} vanished",
              f"{len(diff['versions_changed'])} version change(s)"]
-    return (f"since {prev.get('run_id') or prev.get('source')} ({diff['compared']} checks "
-            f"compared): " + ", ".join(parts))
+    when = f"{prev['date_utc']}, " if prev.get("date_utc") else ""
+    return (f"against {prev.get('run_id') or prev.get('source')} ({when}{diff['compared']} "
+            f"checks compared): " + ", ".join(parts))
 
 
 def diff_lines(diff: Mapping[str, Any], limit: int = 20) -> list[str]:

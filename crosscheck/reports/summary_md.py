@@ -70,8 +70,8 @@ def _failed_section(failed: list) -> list[str]:
 
 
 def diff_markdown(diff: Optional[Mapping[str, Any]]) -> list[str]:
-    """The "since the previous run" section (lines)."""
-    lines = ["", "### Since the previous run", ""]
+    """The "against the run before this one" section (lines)."""
+    lines = ["", "### Against the run before this one", ""]
     if not diff:
         return lines + ["No diff recorded in this report."]
     if diff.get("previous") is None:
