@@ -77,6 +77,26 @@ def test_round_trip_is_bit_exact_with_the_columns_in_order(tmp_path):
     assert (tmp_path / rows.TOLERANCES_FILE) in written
 
 
+def test_columns_csv_lists_the_columns_the_files_have(tmp_path):
+    """issue 28: checks/<engine>/columns.csv says which columns each slice file has (in its
+    order, tol_id included) and which come from tolerances.csv.gz; an older columns.csv
+    (the wide table's columns and kinds only) is still read."""
+    df = _rows("mujoco")
+    write_rows(df, tmp_path, "mujoco")
+    schema = pd.read_csv(tmp_path / "checks" / "mujoco" / rows.COLUMNS_FILE)
+    assert list(schema.columns) == ["column", "kind", "stored_in"]
+    in_slice = list(schema.loc[schema["stored_in"] == "slice", "column"])
+    for path in (tmp_path / "checks" / "mujoco").glob("*.csv.gz"):
+        assert list(pd.read_csv(path, nrows=0).columns) == in_slice, path
+    in_tolerances = set(schema.loc[schema["stored_in"] == rows.TOLERANCES_FILE, "column"])
+    assert in_tolerances == {"tol_abs", "tol_rel", "reason"}
+    assert in_tolerances < set(pd.read_csv(tmp_path / rows.TOLERANCES_FILE).columns)
+    # the layout written before stored_in: the wide table's columns and kinds
+    old = schema[schema["column"] != "tol_id"][["column", "kind"]]
+    old.to_csv(tmp_path / "checks" / "mujoco" / rows.COLUMNS_FILE, index=False)
+    _same(read_rows(tmp_path, "mujoco"), _as_read(df))
+
+
 def test_text_columns_come_back_as_the_strings_written(tmp_path):
     df = _rows("mujoco")
     odd = ["NA", "nan", "0", "1e5", "a,b", 'say "hi"', "two\nlines", "ψ₃ 角", " x ", "True"]

@@ -28,8 +28,12 @@ STORAGE (in a run directory; every file written atomically, gpme_io.atomic):
   crane run has 10,772 distinct triples, 5.6 MB as plain CSV, 153 kB gzipped.
 - ``checks/index.csv``: one row per check: check, engine, section, model, quantity, file
   (the slice, relative to the run directory), n_rows, status (the check's worst status).
-- ``checks/<engine>/columns.csv``: the engine's wide column order and each column's kind
-  (float, int, bool, text), so that :func:`read_rows` gives back the very table written.
+- ``checks/<engine>/columns.csv``: column, kind (float, int, bool, text) and stored_in of
+  every column: ``slice`` for the columns the check files have, in their order (``tol_id``
+  among them), ``tolerances.csv.gz`` for tol_abs, tol_rel and reason (joined by tol_id);
+  in the wide table's order, so that :func:`read_rows` gives back the very table written.
+  (Reports written before 2026-11-26 have no stored_in: their schema is the wide table's,
+  read as such.)
 Several engines write into one directory (verify: gpme, pinocchio, mujoco): tolerances and
 checks/index.csv are merged, an engine's earlier entries replaced by its new ones.
 ``<engine>`` is the engine's name where it is file-safe, else a slug with a hash.
@@ -77,6 +81,8 @@ SLICE_SUFFIX = ".csv.gz"
 KEYS = ("engine", "section", "model", "quantity")
 TOLERANCE = ("tol_abs", "tol_rel", "reason")
 TOL_ID = "tol_id"
+# columns.csv's third column: where a column of the wide table is stored
+STORED_IN, IN_SLICE = "stored_in", "slice"
 INDEX_COLUMNS = ("check", "engine", "section", "model", "quantity", "file", "n_rows",
                  "status")
 KINDS = ("float", "int", "bool", "text")
@@ -169,6 +175,24 @@ def _write_table(path, df):
         atomic_write_text(path, text)
 
 
+def _schema(rows):
+    """columns.csv of the wide ``rows``: column, kind and stored_in, in the wide order with
+    tol_id (a slice column, at tol_abs's place) before the tolerance columns it joins."""
+    return _schema_of_wide(pd.DataFrame({"column": [str(c) for c in rows.columns],
+                                         "kind": [_kind(rows[c]) for c in rows.columns]}))
+
+
+def _schema_of_wide(schema):
+    """The stored_in schema (column, kind, stored_in) of a wide one (column, kind): what
+    :func:`_schema` writes, and how an older columns.csv is read."""
+    out = []
+    for c, kind in zip(schema["column"], schema["kind"]):
+        if c == "tol_abs":
+            out.append((TOL_ID, "text", IN_SLICE))
+        out.append((c, kind, TOLERANCES_FILE if c in TOLERANCE else IN_SLICE))
+    return pd.DataFrame(out, columns=["column", "kind", STORED_IN])
+
+
 def _owned_by(tol_ids, engine):
     """Boolean Series: tol_ids of ``engine`` ("<engine>-<k>")."""
     return tol_ids.map(lambda t: t.rsplit("-", 1)[0] == engine)
@@ -248,8 +272,7 @@ def write_rows(df, out_dir, engine) -> List[Path]:
             pd.DataFrame(columns=list(INDEX_COLUMNS))
     else:
         rows = normalise(df)
-        schema = pd.DataFrame({"column": [str(c) for c in rows.columns],
-                               "kind": [_kind(rows[c]) for c in rows.columns]})
+        schema = _schema(rows)
         tolerances, ids = _tolerance_table(rows, engine)
         stored = rows.drop(columns=["tol_rel", "reason"]).rename(columns={"tol_abs": TOL_ID})
         stored[TOL_ID] = ids
@@ -348,8 +371,10 @@ def read_rows(run_dir, engine: Optional[str] = None) -> pd.DataFrame:
         except (OSError, ValueError, UnicodeDecodeError) as exc:
             problems.append(f"{columns_path}: {exc}")
             continue
-        expected = [TOL_ID if c == "tol_abs" else c for c in schema["column"]
-                    if c not in ("tol_rel", "reason")]
+        if STORED_IN not in schema.columns:     # a report written before stored_in
+            schema = _schema_of_wide(schema)
+        expected = list(schema.loc[schema[STORED_IN] == IN_SLICE, "column"])
+        schema = schema[schema["column"] != TOL_ID]      # the wide table has no tol_id
         pieces = []
         for rel in index.loc[index["engine"] == name, "file"]:
             path = run_dir / rel
