@@ -88,8 +88,10 @@ def _as_grid(cells, x, y, column):
 
 
 def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
-    """Figure: ``metric`` over parameters x, y; infeasible cells grey with a cross, the
-    contour metric = limit drawn when ``limits`` bounds this metric."""
+    """Figure: ``metric`` over parameters x, y; infeasible cells grey with a cross, feasible
+    cells without a value of this metric (NaN: e.g. a vibration frequency of a rigid point)
+    hatched and labelled "no value", never left blank; the contour metric = limit drawn
+    when ``limits`` bounds this metric."""
     from matplotlib.figure import Figure    # matplotlib: heavy, loaded when a figure is drawn
     cells = cell_table(table, x, y, metric)
     fig = Figure(figsize=(6.4, 4.8))
@@ -98,6 +100,7 @@ def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
     label = f"{metric} ({unit})"
     grid = _as_grid(cells, x, y, "_value")
     bad = cells[~cells["_feasible"]]
+    no_value = cells[cells["_feasible"] & cells["_value"].isna()]
     if grid is not None:
         xs, ys, z = grid
         finite = np.isfinite(z)
@@ -121,13 +124,17 @@ def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
             cs = ax.contour(xs, ys, np.ma.masked_invalid(z), [bound], colors="r",
                             linewidths=1.5)
             ax.clabel(cs, fmt=f"limit {bound:g}", fontsize=7)
-        _mark_infeasible_cells(ax, bad, x, y, _edges(xs), _edges(ys), xs, ys)
+        _mark_cells(ax, bad, x, y, _edges(xs), _edges(ys), xs, ys, INFEASIBLE_CELL)
+        _mark_cells(ax, no_value, x, y, _edges(xs), _edges(ys), xs, ys, NO_VALUE_CELL)
     else:
-        good = cells[cells["_feasible"]]
+        good = cells[cells["_feasible"] & cells["_value"].notna()]
         sc = ax.scatter(good[x], good[y], c=good["_value"], cmap="viridis", s=40)
         fig.colorbar(sc, ax=ax, label=label)
         if len(bad):
             ax.scatter(bad[x], bad[y], marker="x", c="k", s=40, label="infeasible")
+        if len(no_value):
+            ax.scatter(no_value[x], no_value[y], marker="o", facecolors="none",
+                       edgecolors="k", s=40, label="no value")
     params = PARAMETERS if parameters is None else parameters
     others = [p for p in table.columns if p in params and p not in (x, y)
               and table[p].nunique() > 1]
@@ -135,20 +142,28 @@ def heat_map(table, x, y, metric, limits=None, units=None, parameters=None):
     ax.set_ylabel(axis_label(y, units))
     title = f"{metric}" + (f" (max over {', '.join(others)})" if others else "")
     ax.set_title(title, fontsize=10)
-    if len(bad):
+    if len(bad) or len(no_value):
         ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
     fig.tight_layout()
     return fig
 
 
-def _mark_infeasible_cells(ax, bad, x, y, x_edges, y_edges, xs, ys):
+# how a cell without a colour is drawn: (label, face colour, hatch)
+INFEASIBLE_CELL = ("infeasible", "0.75", "xx")
+NO_VALUE_CELL = ("no value", "white", "//")
+
+
+def _mark_cells(ax, cells, x, y, x_edges, y_edges, xs, ys, style):
+    """Draw ``cells`` (rows of cell_table) as hatched rectangles of ``style``, the first
+    one labelled for the legend."""
     from matplotlib.patches import Rectangle    # matplotlib: heavy, loaded when drawing
-    for k, (_, row) in enumerate(bad.iterrows()):
+    label, face, hatch = style
+    for k, (_, row) in enumerate(cells.iterrows()):
         j, i = int(np.searchsorted(xs, row[x])), int(np.searchsorted(ys, row[y]))
         ax.add_patch(Rectangle((x_edges[j], y_edges[i]), x_edges[j + 1] - x_edges[j],
-                               y_edges[i + 1] - y_edges[i], facecolor="0.75", hatch="xx",
+                               y_edges[i + 1] - y_edges[i], facecolor=face, hatch=hatch,
                                edgecolor="0.35", linewidth=0.0,
-                               label="infeasible" if k == 0 else None))
+                               label=label if k == 0 else None))
 
 
 def safe_region(table, x, y, limits, units=None):

@@ -270,6 +270,25 @@ def test_plots_mark_the_infeasible_cell(tmp_path):
     assert all(p.stat().st_size > 1000 for p in paths.values())
 
 
+def test_a_point_without_a_value_is_marked_not_left_blank():
+    """issue 28: a point that ran and met its constraints but has no value of the metric
+    (NaN: a rigid point's vibration frequency) is hatched "no value" on the grid and a
+    hollow marker on a scatter, apart from the infeasible ones."""
+    from gpme_study.plots import heat_map
+    table = _synthetic_table()
+    table.loc[0, "vib_peak_m"] = np.nan                 # ok, constraints met, no value
+    fig = heat_map(table, "amplitude", "period", "vib_peak_m")
+    ax = fig.axes[0]
+    marked = {p.get_hatch(): p for p in ax.patches}
+    assert set(marked) == {"xx", "//"}
+    assert (marked["//"].get_x(), marked["//"].get_y()) == (pytest.approx(0.05),
+                                                            pytest.approx(0.5))
+    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"infeasible", "no value"}
+    scatter = table.drop(index=[1])                     # not a full grid: a scatter plot
+    ax = heat_map(scatter, "amplitude", "period", "vib_peak_m").axes[0]
+    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"infeasible", "no value"}
+
+
 # ------------------------------------------------------------------ command line
 def test_cli_sweep_on_the_default_local_cluster(tmp_path, capsys):
     out = tmp_path / "cli"
