@@ -25,6 +25,7 @@ import numpy as np
 from . import transforms as tf
 from .dynamics import mass_matrix
 from .errors import InertiaWarning, ModelError
+from .geometry import Shape
 from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
 from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE  # noqa: F401 (users import them here)
 from .rfem import discretise_beam
@@ -138,9 +139,12 @@ class Model:
     damping, lower_limits, upper_limits (n,) in the coordinates' SI units.
     """
 
-    def __init__(self, joints, links, frames, drives, gravity, flexible_links, name):
+    def __init__(self, joints, links, frames, drives, gravity, flexible_links, name,
+                 geometry=()):
         put = self._init_attr
         put("name", name)
+        # gpme_core.geometry.Shape records: what the links look like (never dynamics)
+        put("geometry", tuple(geometry))
         put("joints", tuple(joints))
         put("links", tuple(links))
         put("frames", MappingProxyType(dict(frames)))
@@ -186,7 +190,7 @@ class Model:
     def __reduce__(self):
         # the read-only mapping does not pickle; rebuilt from the parts (e.g. for workers)
         return (Model, (self.joints, self.links, dict(self.frames), self.drives,
-                        tuple(self.gravity), self.flexible_links, self.name))
+                        tuple(self.gravity), self.flexible_links, self.name, self.geometry))
 
     # ------------------------------------------------------------------ lookup
     def index(self, name):
@@ -257,7 +261,7 @@ class Model:
         joints = [Joint(**{**j.__dict__, **joint_changes.get(j.name, {})}) for j in self.joints]
         links = [Link(lk.name, link_inertias.get(lk.name, lk.inertia)) for lk in self.links]
         model = Model(joints, links, self.frames, self.drives, self.gravity,
-                      self.flexible_links, name or self.name)
+                      self.flexible_links, name or self.name, self.geometry)
         validate_model(model)
         return model
 
@@ -315,6 +319,12 @@ def validate_model(model):
         link_names.add(lk.name)
         if lk.inertia is not None:
             problems += lk.inertia.problems(f"link {lk.name!r}")
+    for k, shape in enumerate(model.geometry):
+        if not 0 <= shape.link_index < model.n_coordinates:
+            problems.append(f"shape {k}: link index {shape.link_index} out of range")
+        else:
+            problems += shape.problems(f"shape {k} on link "
+                                       f"{model.links[shape.link_index].name!r}")
     for name, fr in model.frames.items():
         if not 0 <= fr.link_index < model.n_coordinates:
             problems.append(f"frame {name!r}: link index {fr.link_index} out of range")
@@ -377,6 +387,7 @@ class ChainBuilder:
         self._drives = []
         self._flex = []
         self._pending_origin = np.eye(4)   # offset of the next joint (e.g. a beam tip)
+        self._shapes = []                  # gpme_core.geometry.Shape of the links
 
     @property
     def n_joints(self):
@@ -414,6 +425,20 @@ class ChainBuilder:
         self._link_parts[-1].append(inertia if np.array_equal(x, np.eye(4)) else None)
         prev = self._link_h[-1]
         self._link_h[-1] = h if prev is None else prev + h
+
+    def add_shape(self, kind, size, origin=None, role="both", mesh=None, rgba=None):
+        """Attach a shape (gpme_core.geometry: what the link looks like, never mass) to the
+        current link; ``origin`` (4, 4) its frame in the link frame (after a pending beam
+        tip offset, as for a body)."""
+        if not self._joints:
+            raise ModelError("add a joint before attaching a shape")
+        x = self._pending_origin if origin is None else \
+            self._pending_origin @ np.asarray(origin, float)
+        shape = Shape(len(self._joints) - 1, kind, size, x, role, mesh, rgba)
+        problems = shape.problems(f"shape on link {self._link_names[-1]!r}")
+        if problems:
+            raise ModelError(problems)
+        self._shapes.append(shape)
 
     def add_frame(self, name, transform=None):
         """Name a frame fixed on the current link (e.g. the end-effector)."""
@@ -463,6 +488,6 @@ class ChainBuilder:
                 m, c, i_c = inertia_from_pseudo(h)
                 links.append(Link(name, RigidBodyInertia(m, c, i_c)))
         model = Model(self._joints, links, self._frames, self._drives, self.gravity,
-                      self._flex, self.name)
+                      self._flex, self.name, self._shapes)
         validate_model(model)
         return model

@@ -45,7 +45,7 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import transforms as tf
+from . import geometry, transforms as tf
 from .errors import ModelError, SectionWarning
 from .inertia import RigidBodyInertia
 from .joint_kinds import REVOLUTE
@@ -479,6 +479,20 @@ class FlexibleLinkInfo:
         object.__setattr__(self, "link_indices", tuple(int(k) for k in self.link_indices))
 
 
+def _element_shape(builder, beam, length, frame):
+    """The visual shape of a rigid element of ``length`` m from the origin of ``frame``
+    along its x axis: a cylinder of the outer radius for a round section (a tube drawn
+    solid), a box of the extreme fibres otherwise; none when the section's extreme fibres
+    are not known.  Visual only: neighbouring elements touch, and a collision shape would
+    make a simulator's contacts between them."""
+    c_y, c_z = beam.extreme_fibre_y, beam.extreme_fibre_z
+    if c_y is None or c_z is None:
+        return
+    round_section = c_y == c_z and beam.area <= np.pi * c_y * c_y * (1 + 1e-9)
+    kind, size, origin = geometry.member(length, c_y, c_z, round_section, frame)
+    builder.add_shape(kind, size, origin, role="visual", rgba=geometry.ELEMENT_RGBA)
+
+
 def discretise_beam(builder, name, beam, n_segments, frame=None):
     """Add the RFEM discretisation of ``beam`` to ``builder`` on its current link.
 
@@ -506,11 +520,13 @@ def discretise_beam(builder, name, beam, n_segments, frame=None):
     pending = builder.pending_origin()                   # link frame -> attachment point
     if n == 0:
         builder.add_body(beam.element_inertia(beam.length), origin=t_link_beam)
+        _element_shape(builder, beam, beam.length, t_link_beam)
         builder.set_pending_origin(pending @ t_link_beam @ tf.translation(beam.length))
         builder.record_flexible_link(FlexibleLinkInfo(name, beam, 0, (), ()))
         return
     dl = beam.length / n
     builder.add_body(beam.element_inertia(0.5 * dl), origin=t_link_beam)  # rfe 0
+    _element_shape(builder, beam, 0.5 * dl, t_link_beam)
     stiff, damp = beam.sde_coefficients(n)
     joints, links = [], []
     for r in range(1, n + 1):
@@ -524,5 +540,6 @@ def discretise_beam(builder, name, beam, n_segments, frame=None):
             joints.append(idx)
             links.append(idx)
         builder.add_body(beam.element_inertia(dl if r < n else 0.5 * dl))
+        _element_shape(builder, beam, dl if r < n else 0.5 * dl, np.eye(4))
     builder.set_pending_origin(tf.translation(0.5 * dl))
     builder.record_flexible_link(FlexibleLinkInfo(name, beam, n, tuple(joints), tuple(links)))

@@ -29,6 +29,7 @@ import numpy as np
 
 from gpme_core import transforms as tf
 from gpme_core.constraints import CoordinateProgramme, EllipseConstraint
+from gpme_core.geometry import RIGID_RGBA, member
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import cuboid, cylinder
 from gpme_core.model import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, ChainBuilder
@@ -122,9 +123,15 @@ def build_crane(n_rfe=0, params=CraneParameters(), name=None):
     b.add_joint("z1", PRISMATIC, (0, 0, 1), stiffness=p.support_stiffness,
                 damping=p.support_damping, link="base")
     b.add_body(cuboid(p.base_mass, p.base_size, com=(0.0, 0.0, -0.5 * p.base_size[2])))
+    # what the links look like (gpme_core.geometry; never mass): drawn from the same sizes
+    b.add_shape("box", p.base_size, tf.translation(0, 0, -0.5 * p.base_size[2]),
+                rgba=RIGID_RGBA)
     b.add_joint("psi2", REVOLUTE, (0, 0, 1), link="column")
     b.add_body(cylinder(p.column_mass, p.column_radius, p.column_height, axis=2,
                         com=(0.0, 0.0, 0.5 * p.column_height), inner_radius=p.column_inner_radius))
+    # the drum drawn solid at its outer radius (a tube as one cylinder)
+    b.add_shape("cylinder", (p.column_radius, p.column_height),
+                tf.translation(0, 0, 0.5 * p.column_height), rgba=RIGID_RGBA)
     b.add_joint("psi3", REVOLUTE, (0, 0, 1),
                 origin=tf.translation(0, 0, p.column_height) @ tf.rot_x(np.pi / 2), link="arm",
                 limits=p.arm_pitch_range)
@@ -132,6 +139,10 @@ def build_crane(n_rfe=0, params=CraneParameters(), name=None):
     b.add_joint("z4", PRISMATIC, (1, 0, 0), link="slider", limits=p.slider_stroke)
     b.add_body(cylinder(p.slider_mass, p.slider_radius, p.slider_length, axis=0,
                         com=(-0.5 * p.slider_length, 0.0, 0.0)))
+    # visual only: pulled in, the rod reaches the column's top, and a collision shape
+    # there would make a simulator's contacts the crane does not have
+    b.add_shape(*member(p.slider_length, p.slider_radius, p.slider_radius, True,
+                        start=-p.slider_length), role="visual", rgba=RIGID_RGBA)
     b.add_frame("E")
     b.add_drive("psi2", QuinticRamp(p.drive_torque, p.drive_ramp_time))
     return b.build()

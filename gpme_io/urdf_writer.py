@@ -15,6 +15,9 @@
                       of an RFEM spring-damping element) gets an explicit zero <inertial>
                       (mass 0, zero tensor, origin 0): a link without <inertial> is 1 kg
                       with unit inertia in PyBullet;
+* shapes           -> the link's <visual> (with a named <material> colour) and <collision>
+                      elements (gpme_core.geometry: RFEM elements as cylinders or boxes of
+                      their section, visual only; never mass);
 * frame ``F``      -> a link ``F`` with a zero <inertial> on a fixed joint ``F_fixed``;
 * stiffness, spring reference, gravity, drives, the massless-link list and the RFEM
   records go to the side file ``<stem>.gpme.json`` beside the URDF (gpme_io.side_file).
@@ -79,6 +82,38 @@ def _inertial(parent, inertia) -> None:
     i = inertia.inertia_array
     ET.SubElement(el, "inertia", ixx=_num(i[0, 0]), ixy=_num(i[0, 1]), ixz=_num(i[0, 2]),
                   iyy=_num(i[1, 1]), iyz=_num(i[1, 2]), izz=_num(i[2, 2]))
+
+
+def _shape_geometry(parent, shape) -> None:
+    """<geometry> of a gpme_core.geometry.Shape."""
+    g = ET.SubElement(parent, "geometry")
+    if shape.kind == "box":
+        ET.SubElement(g, "box", size=_vec(shape.size))
+    elif shape.kind == "cylinder":
+        ET.SubElement(g, "cylinder", radius=_num(shape.size[0]), length=_num(shape.size[1]))
+    elif shape.kind == "sphere":
+        ET.SubElement(g, "sphere", radius=_num(shape.size[0]))
+    else:
+        ET.SubElement(g, "mesh", filename=shape.mesh, scale=_vec(shape.size))
+
+
+def _shapes(link_el, shapes) -> None:
+    """<visual> and <collision> elements of a link's shapes (a "both" shape gives one of
+    each; a visual's colour is a named <material>, the name made of the colour so that
+    equal names never carry different colours)."""
+    for shape in shapes:
+        if shape.is_visual:
+            v = ET.SubElement(link_el, "visual")
+            _origin(v, shape.origin_array)
+            _shape_geometry(v, shape)
+            if shape.rgba is not None:
+                name = "rgba_" + "".join(f"{round(255 * c):02x}" for c in shape.rgba)
+                m = ET.SubElement(v, "material", name=name)
+                ET.SubElement(m, "color", rgba=_vec(shape.rgba))
+        if shape.is_collision:
+            c = ET.SubElement(link_el, "collision")
+            _origin(c, shape.origin_array)
+            _shape_geometry(c, shape)
 
 
 def link_own_frame(model: Model, name: str) -> bool:
@@ -148,7 +183,10 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
                   boundmass=_num(MUJOCO_BOUND), boundinertia=_num(MUJOCO_BOUND))
     ET.SubElement(robot, "link", name=ROOT_LINK)
     parent = ROOT_LINK
-    for joint, link in zip(model.joints, model.links):
+    by_link = {}
+    for shape in model.geometry:
+        by_link.setdefault(shape.link_index, []).append(shape)
+    for k, (joint, link) in enumerate(zip(model.joints, model.links)):
         j = ET.SubElement(robot, "joint", name=joint.name, type=_URDF_KIND[joint.kind])
         ET.SubElement(j, "parent", link=parent)
         ET.SubElement(j, "child", link=link.name)
@@ -158,7 +196,9 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
         ET.SubElement(j, "limit", lower=_num(lower), upper=_num(upper),
                       effort=_num(UNLIMITED), velocity=_num(UNLIMITED))
         ET.SubElement(j, "dynamics", damping=_num(joint.damping), friction="0")
-        _inertial(ET.SubElement(robot, "link", name=link.name), link.inertia)
+        link_el = ET.SubElement(robot, "link", name=link.name)
+        _inertial(link_el, link.inertia)
+        _shapes(link_el, by_link.get(k, []))
         parent = link.name
     for name in _written_frames(model):
         fr = model.frames[name]

@@ -111,8 +111,8 @@ def test_ignored_elements_are_named_once_and_the_file_loads():
             "<safety_controller> on 1 joint ignored (controller settings, not dynamics): j1",
             "<calibration> on 1 joint ignored (encoder reference, not dynamics): j1",
             "<mimic> on 1 joint ignored (a fixed joint does not move): tool_joint",
-            "<visual>/<collision> on 2 links ignored (geometry; gpme needs only mass "
-            "properties): base, upper",
+            "<visual>/<collision> of 1 link fixed to the world left out (they do not move; "
+            "the model has no world body): base",
             "<transmission>", "<gazebo>",
             "<limit lower == upper> on 1 joint read as no range (unlimited; URDF's default "
             "lower = upper = 0 when a <limit> gives only effort and velocity): j2"):
@@ -122,6 +122,10 @@ def test_ignored_elements_are_named_once_and_the_file_loads():
     assert model.joints[0].limits == (-2.0, 2.0) and model.joints[0].damping == 0.5
     assert model.joints[1].limits == (-np.inf, np.inf)
     assert set(res.frames) == {"tool"} and model.total_mass == 3.0
+    # the moving link's <collision> is kept (issue 28), in its link frame, mass unchanged
+    (shape,) = model.geometry
+    assert (model.links[shape.link_index].name, shape.kind, shape.size, shape.role) == \
+        ("upper", "cylinder", (0.02, 0.4), "collision")
 
 
 def test_lower_above_upper_stays_an_error(tmp_path):

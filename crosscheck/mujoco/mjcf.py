@@ -15,8 +15,11 @@ Mapping (docs/mjcf.md has the full table):
 * link inertia -> <inertial pos=com mass fullinertia> in the body frame (about the com).
 * named frames -> sites; drives -> <motor> actuators (gear 1, unlimited ctrl) named
   ``drive_<joint>``: the drive function itself is applied by the caller (mjcb_control).
-* gravity, timestep, RK4 integrator -> <option>; contacts disabled (there are no
-  collision geoms; the small spheres are for a viewer only and carry no mass).
+* shapes (gpme_core.geometry) -> <geom>s of the link's body, for a viewer only: contype =
+  conaffinity = 0, no mass (inertiafromgeom="false"); meshes MuJoCo reads (STL, OBJ) as
+  <asset> meshes, others left out with a comment.
+* gravity, timestep, RK4 integrator -> <option>; contacts disabled (no geom collides; the
+  small spheres at the centres of mass are for a viewer only and carry no mass).
 
 Coordinates: MuJoCo's qpos of the chain joints equals gpme's q (same order), and
 qvel equals q_dot; the auxiliary joints (crosscheck.mujoco.mechanism.AUX_JOINTS) follow.
@@ -228,8 +231,42 @@ def name_problems(model: Model, programme: mech.EllipticProgramme | None = None)
     return problems
 
 
-def _chain(worldbody, model):
-    """Nested <body> elements of the chain (see the module docstring) under ``worldbody``."""
+# mesh files MuJoCo reads (its <asset><mesh>); a link's other meshes (.dae, ...) are left
+# out of the MJCF with a comment
+MUJOCO_MESHES = (".stl", ".obj", ".msh")
+
+
+def _shape_geom(body, shape, meshes):
+    """A <geom> of a gpme_core.geometry.Shape: visual only (contype = conaffinity = 0;
+    group 1 seen, group 3 a collision shape; contacts are disabled anyway) and massless
+    (inertiafromgeom="false"); a mesh MuJoCo cannot read is a comment instead."""
+    attributes = {"contype": "0", "conaffinity": "0", "group": "1" if shape.is_visual else "3",
+                  **_pose_attributes(shape.origin_array)}
+    if shape.rgba is not None:
+        attributes["rgba"] = _vec(shape.rgba)
+    if shape.kind == "box":
+        attributes.update(type="box", size=_vec(np.array(shape.size) / 2))
+    elif shape.kind == "cylinder":
+        attributes.update(type="cylinder", size=_vec((shape.size[0], shape.size[1] / 2)))
+    elif shape.kind == "sphere":
+        attributes.update(type="sphere", size=_f(shape.size[0]))
+    elif Path(shape.mesh).suffix.lower() in MUJOCO_MESHES and Path(shape.mesh).is_file():
+        name = meshes.setdefault((shape.mesh, shape.size), f"mesh{len(meshes)}")
+        attributes.update(type="mesh", mesh=name)
+    else:
+        body.append(xml_comment(f"mesh {shape.mesh} left out: MuJoCo reads "
+                                f"{', '.join(MUJOCO_MESHES)} files it can find"))
+        return
+    ET.SubElement(body, "geom", attributes)
+
+
+def _chain(worldbody, model, meshes=None):
+    """Nested <body> elements of the chain (see the module docstring) under ``worldbody``;
+    ``meshes`` collects {(file, scale): asset name} of the mesh geoms."""
+    meshes = {} if meshes is None else meshes
+    shapes_by_link = {}
+    for shape in model.geometry:
+        shapes_by_link.setdefault(shape.link_index, []).append(shape)
     frames_by_link = {}
     for name, fr in model.frames.items():
         frames_by_link.setdefault(fr.link_index, []).append((name, fr))
@@ -256,6 +293,8 @@ def _chain(worldbody, model):
                       fullinertia=_vec((i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])))
         ET.SubElement(body, "geom", type="sphere", size=_f(VIEW_SPHERE_RADIUS), pos=_vec(c),
                       contype="0", conaffinity="0", group="1", rgba="0.3 0.5 0.8 1")
+        for shape in shapes_by_link.get(last, []):   # what the link looks like (never mass)
+            _shape_geom(body, shape, meshes)
         for name, fr in sorted(frames_by_link.get(last, [])):
             ET.SubElement(body, "site", name=name, **_pose_attributes(fr.transform),
                           size="0.02", rgba="1 0.2 0.2 1")
@@ -386,7 +425,13 @@ def mjcf_element(model: Model, dt: float = 1e-4, constraints: Sequence | None = 
         flags.update(diagexact="enable", refsafe="disable")
     ET.SubElement(option, "flag", flags)
     worldbody = ET.SubElement(root, "worldbody")
-    _chain(worldbody, model)
+    meshes = {}
+    _chain(worldbody, model, meshes)
+    if meshes:
+        asset = ET.Element("asset")
+        for (path, scale), name in meshes.items():
+            ET.SubElement(asset, "mesh", name=name, file=path, scale=_vec(scale))
+        root.insert(list(root).index(worldbody), asset)
     if programme is not None:
         _mechanism(root, worldbody, model, programme, settings)
     if model.drives:

@@ -220,7 +220,7 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
         if changes:
             model = model.with_changes(joint_changes=changes)
         model = Model(model.joints, model.links, frames, drives, model.gravity,
-                      model.flexible_links, model.name)
+                      model.flexible_links, model.name, model.geometry)
         validate_model(model)
     except ModelError as exc:
         raise ModelFileError([f"{label}: joint: {p}" for p in exc.problems]) from None

@@ -28,14 +28,17 @@ def _builder(robot, side, gravity, name, notes) -> ChainBuilder:
 
 
 def _assemble(builder, chain, placement, side_use, inertias, flexible, plans,
-              notes) -> tuple:
+              notes, shapes=None) -> tuple:
     """(Model, frame names): the chain's joints with the side file's springs, each chain
     link's body or beam, the links merged into it (mass and frame), the side file's drives
     and RFEM records; raises ModelError with the built model's problems.
 
     inertias : {link: RigidBodyInertia or None}
     flexible : {link: FlexibleSpec}; plans: {link: beam plan or None (invalid spec)}
+    shapes   : {link: [gpme_io.urdf_read.shapes.link_shapes tuple]}: what the moving links
+               look like, placed on their chain link like their mass
     """
+    shapes = shapes or {}
     frames = []
     after = np.eye(4)       # correction of the previous link's frame (beam tip)
     for k, j in enumerate(chain.joints):
@@ -46,15 +49,25 @@ def _assemble(builder, chain, placement, side_use, inertias, flexible, plans,
                           spring_reference=spring.get("spring_reference", 0.0),
                           damping=j.damping, link=j.child, limits=j.limits)
         after = _add_link_mass(builder, j.child, flexible, plans.get(j.child), inertias, notes)
+        # a chain link's own shapes (a flexible link has none: its elements' instead)
+        _add_shapes(builder, shapes.get(j.child, ()), np.eye(4))
         for x in placement.attached.get(k, []):
             if inertias.get(x) is not None:
                 builder.add_body(inertias[x], origin=after @ placement.pose[x])
+            _add_shapes(builder, shapes.get(x, ()), after @ placement.pose[x])
             builder.add_frame(x, after @ placement.pose[x])
             frames.append(x)
     for rec in side_use.drives:
         builder.add_drive(rec["joint"], drive_function(rec))
     model = builder.build()
     return _with_flexible_records(model, side_use.flexible, flexible), tuple(frames)
+
+
+def _add_shapes(builder, shapes, placed) -> None:
+    """Attach ``shapes`` (link_shapes tuples, each in its URDF link's frame) to the
+    builder's newest link, that URDF link's frame being ``placed`` (4, 4) in it."""
+    for role, kind, size, origin, mesh, rgba in shapes:
+        builder.add_shape(kind, size, placed @ origin, role=role, mesh=mesh, rgba=rgba)
 
 
 def _add_link_mass(builder, link, flexible, plan, inertias, notes) -> NDArray[np.float64]:
@@ -96,6 +109,6 @@ def _with_flexible_records(model, side_flex, flexible) -> Model:
     order = {lk.name: k for k, lk in enumerate(model.links)}
     records.sort(key=lambda r: order.get(r.name, -1))
     out = Model(model.joints, model.links, model.frames, model.drives, model.gravity, records,
-                model.name)
+                model.name, model.geometry)
     validate_model(out)
     return out

@@ -16,8 +16,14 @@ _NOTE_TEXT = {
               "dynamics): ",
     "calibration": "<calibration> on {n} joint{s} ignored (encoder reference, not dynamics): ",
     "mimic_fixed": "<mimic> on {n} joint{s} ignored (a fixed joint does not move): ",
-    "visual": "<visual>/<collision> on {n} link{s} ignored (geometry; gpme needs only mass "
-              "properties): ",
+    "bad_shape": "<visual>/<collision> that cannot be read left out ({n}; geometry only, the "
+                 "dynamics are the same): ",
+    "unresolved_mesh": "mesh file{s} not found, kept as written ({n}; a viewer given the "
+                       "package's folder finds them): ",
+    "world_shapes": "<visual>/<collision> of {n} link{s} fixed to the world left out (they do "
+                    "not move; the model has no world body): ",
+    "flexible_shapes": "<visual>/<collision> of {n} flexible link{s} replaced by the RFEM "
+                       "elements' shapes (cylinders or boxes of the section): ",
     "tags": "extension elements of {n} kind{s} ignored (not URDF dynamics): ",
     "axis": "<axis xyz> not of unit length on {n} joint{s}, normalised (as URDF readers "
             "do): ",

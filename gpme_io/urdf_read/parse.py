@@ -48,6 +48,7 @@ class _Parsed:
     bad_inertia: dict         # link -> [problems of its <inertial>]
     geometry_only: list       # links with <visual>/<collision> but no <inertial>
     left_out: list            # joints not in the tree: no name, unknown type, bad ends
+    link_elements: dict       # link -> its <link> element (shapes are read from it)
 
 
 def _parse(robot, problems, notes) -> _Parsed:
@@ -79,7 +80,6 @@ def _parse(robot, problems, notes) -> _Parsed:
         if bad:
             bad_inertia[name] = bad
         if el.find("visual") is not None or el.find("collision") is not None:
-            notes.add("visual", name)
             if el.find("inertial") is None:
                 geometry_only.append(name)
         for child in el:
@@ -98,4 +98,5 @@ def _parse(robot, problems, notes) -> _Parsed:
     if dup:
         problems.append(f"joint names repeat: {dup}")
     return _Parsed([n for n in link_names if n is not None], inertias, joints, bad_inertia,
-                   geometry_only, left_out)
+                   geometry_only, left_out,
+                   {n: el for el, n in zip(link_els, link_names) if n is not None})

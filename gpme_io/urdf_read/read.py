@@ -8,6 +8,7 @@ stage appends its problems to one list; a stage that cannot run without the one 
 problems so far, and the rest raise together at the end, in one ModelFileError.
 """
 from dataclasses import dataclass
+from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
 
@@ -21,7 +22,8 @@ from .masses import (_geometry_problems, _inertial_problems, _massless_note, _me
                      _size_problem)
 from .notes import _Notes
 from .parse import _parse, _parse_xml
-from .placement import _Chain, _place
+from .placement import _WORLD, _Chain, _place
+from .shapes import link_shapes, robot_materials
 from .side_match import _match_side
 from .tree import _CHAIN_SKIPPED, _path, _select_chain, _tree
 
@@ -108,10 +110,11 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
 
     # build (also when earlier problems exist, to report the model's own problems too)
     builder = _builder(robot, side, gravity, name, notes)
+    shapes = _read_shapes(robot, parsed, placement, flexible, source, notes)
     model, frames = None, ()
     try:
         model, frames = _assemble(builder, picked, placement, side_use, parsed.inertias,
-                                  flexible, plans, notes)
+                                  flexible, plans, notes, shapes)
     except ModelError as exc:
         suffix = (" (found with the invalid <inertial> elements above left out)"
                   if set(parsed.bad_inertia) - set(world_fixed_bad) else "")
@@ -120,6 +123,26 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
         _fail(source, problems)
     return UrdfReadResult(model, notes.lines(), MappingProxyType(dict(values)),
                           (picked.root, picked.tip), tuple(picked.names), frames)
+
+
+def _read_shapes(robot, parsed, placement, flexible, source, notes) -> dict:
+    """{moving link: its shapes (gpme_io.urdf_read.shapes.link_shapes)}; the shapes of
+    links fixed to the world and of flexible links (replaced by the RFEM elements') are
+    left out, noted."""
+    path = Path(source) if source != "<urdf>" and Path(source).is_file() else None
+    materials = robot_materials(robot)
+    out = {}
+    for link, el in parsed.link_elements.items():
+        shapes = link_shapes(el, path, materials, notes)
+        if not shapes:
+            continue
+        if placement.owner.get(link, _WORLD) == _WORLD:
+            notes.add("world_shapes", link)
+        elif link in flexible:
+            notes.add("flexible_shapes", link)
+        else:
+            out[link] = shapes
+    return out
 
 
 def _choose_chain(parsed, chain, frozen, problems, source) -> tuple:
