@@ -1,6 +1,7 @@
 """Run a scenario with gpme and write its history and figures (used by `gpme simulate` and
 the gpme step of `gpme verify`)."""
 import json
+import logging
 from pathlib import Path
 
 from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
@@ -13,7 +14,9 @@ from gpme_core.run_result import RunSettings
 from gpme_io.file_names import named_path
 from gpme_io.progress import progress_callback
 
-from . import figures
+from . import animation, figures
+
+log = logging.getLogger("gpme.runs")
 
 
 def resolved_step(scenario, dt=None):
@@ -83,7 +86,8 @@ def events_json(df):
 
 
 def write_run_outputs(scenario, df, out_dir, compressed=False):
-    """<out_dir>/<name>.csv and <name>_<figure>.png for one run, and <name>_events.json
+    """<out_dir>/<name>.csv and <name>_<figure>.png for one run, <name>_motion.html (the
+    motion in 3D, gpme_io.animation; a stick figure for a model without shapes), and <name>_events.json
     when the run switched its dependent coordinates; returns {label: path}.  With
     ``compressed`` (verify's report) the history is <name>.csv.gz with
     gpme_io.atomic.HISTORY_DIGITS significant digits instead of full precision."""
@@ -99,4 +103,14 @@ def write_run_outputs(scenario, df, out_dir, compressed=False):
         path = named_path(out, scenario.name, f"_{name}")
         atomic_save_figure(make(scenario, df), path)
         paths[path.name] = path
+    if scenario.model.n_coordinates:
+        path = named_path(out, scenario.name, "_motion.html")
+        frames = [f for f in dict.fromkeys(getattr(c, "frame", None)
+                                           for c in scenario.constraints) if f]
+        title = f"{df.attrs.get('method', 'RK4')}, {float(df['t'].iloc[-1]):g} s"
+        try:
+            paths[path.name] = animation.write_motion(scenario.model, df, path, title,
+                                                      constrained=frames)
+        except ValueError as exc:         # over the page's size budget: said, not written
+            log.warning("%s: no 3D animation: %s", scenario.name, exc)
     return paths

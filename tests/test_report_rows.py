@@ -307,7 +307,7 @@ def test_a_model_run_history_reads_back(tmp_path, monkeypatch, compressed):
     df = simulate_scenario(scenario, quick=True)
     paths = write_run_outputs(scenario, df, tmp_path, compressed=compressed)
     name = "point_pendulum.csv.gz" if compressed else "point_pendulum.csv"
-    assert set(paths) == {name, "point_pendulum_coordinates.png"}
+    assert set(paths) == {name, "point_pendulum_coordinates.png", "point_pendulum_motion.html"}
     back = pd.read_csv(paths[name])
     _same(back, _rounded(df, HISTORY_DIGITS) if compressed else df)
     if compressed:

@@ -30,6 +30,8 @@ import pandas as pd
 
 from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate
+from gpme_io.animation import write_motion
+from gpme_io.file_names import named_path
 from gpme_io.runs import resolved_step
 
 from .. import inertia_gate, run_gates
@@ -283,5 +285,9 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
     df = df[front + [c for c in df.columns if c not in front]]
     convergence = pd.concat(tables, ignore_index=True) if tables else pd.DataFrame()
     write_report(out_dir, df, convergence, plots, quick, [s.name for s in scenarios])
+    for (section, name), (model, gpme_run, mujoco_run) in plots.items():
+        if section == "exact":        # gpme's motion with MuJoCo's as a ghost, overlaid
+            write_motion(model, gpme_run, named_path(out_dir, f"mujoco_{name}", "_motion.html"),
+                         "exact programmed run, gpme", overlay=("MuJoCo", mujoco_run))
     log(f"written the rows under {out_dir / 'checks'} and {out_dir / 'mujoco.html'}")
     return df

@@ -203,8 +203,10 @@ def _runs_section(run_dir):
                  "flexible support, drive torque ramp, programmed ellipse and height; the "
                  "paper's figures first.")
     return {"title": "Each model's own run", "text": text,
-            "files": [{"href": f"runs/{p.name}", "note": ""} for p in sorted(runs.iterdir())
-                      if p.suffix != ".png"],
+            "files": [{"href": f"runs/{p.name}",
+                       "note": "the motion in 3D (opens offline; elastic deflection magnified "
+                               "as its page says)" if p.name.endswith("_motion.html") else ""}
+                      for p in sorted(runs.iterdir()) if p.suffix != ".png"],
             "figures": figures}
 
 
@@ -256,7 +258,9 @@ def _files(run_dir):
         if p.name.startswith(".") or p.name == "index.html":
             continue
         note = FILE_NOTES.get(p.name) or ("traceback of a crashed step" if p.name.endswith(
-            "_crash.txt") else "plot" if p.suffix == ".png" else "")
+            "_crash.txt") else "plot" if p.suffix == ".png" else
+            "the motion in 3D, another engine's run as a ghost (opens offline)"
+            if p.name.endswith("_motion.html") else "")
         out.append({"href": p.name + ("/" if p.is_dir() else ""), "note": note})
     return out
 
