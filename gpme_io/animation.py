@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gpme_core.geometry import ELEMENT_RGBA, RIGID_RGBA, Shape, member
 from gpme_core.kinematics import link_transforms
 
 from .atomic import atomic_write_text
@@ -91,7 +92,6 @@ def stick_shapes(model):
     """Shapes of a model that has none (a URDF without <visual>): a sphere at every joint
     and a rod from each joint to the next (and to every named frame), sized from the
     model's reach at its spring references, so that every model can be watched."""
-    from gpme_core.geometry import ELEMENT_RGBA, RIGID_RGBA, Shape, member
     n = model.n_coordinates
     ends = {k: [] for k in range(n)}
     for k in range(n - 1):
