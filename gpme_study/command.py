@@ -17,10 +17,10 @@ from gpme_io.out_lock import (OutputBusyError, busy_problem, exclusive_output,
                               output_dir_problem)
 
 from .cost import estimate
-from .model_metrics import heat_map_metrics
 from .plots import write_plots
 from .runner import connect, pending_points, run_sweep
 from .spec_points import SweepSpecError, read_spec_file
+from .sweep_kinds import sweep_kind
 from .sweep_spec import spec_from_dict
 
 RUN_FLAGS = {"t_end": "t_end", "n_rfe": "n_rfe", "transient": "transient",
@@ -202,14 +202,8 @@ def _sweep_and_report(args, spec, data, client, out, report, in_process):
     table = run_sweep(spec, out, scheduler=args.scheduler, n_workers=args.workers,
                       retry_errors=args.retry_errors, report=report, in_process=in_process,
                       client=client, terminal=sys.stdout.isatty())
-    if spec.model is None:
-        paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits)
-    else:
-        units = {name: spec.model.unit(name) for name in spec.swept}
-        units.update({name: v[0] for name, v in spec.metric_table.items()})
-        paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits,
-                            metrics=heat_map_metrics(spec.metric_table, spec.limits),
-                            units=units, parameters=spec.swept)
+    paths = write_plots(table, out, spec.plot_x, spec.plot_y, spec.limits,
+                        **sweep_kind(spec).plot_options(spec))
     counts = table["status"].value_counts().to_dict()
     print(f"{len(table)} points: {counts}; computed {table.attrs['computed']} in "
           f"{table.attrs['wall_time_s']:.1f} s; table {out / 'results.csv'} (+ .parquet)")

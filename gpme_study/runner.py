@@ -24,9 +24,8 @@ from gpme_core.integrate import simulate
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_io.atomic import atomic_write_bytes, atomic_write_text
 
-from .model_point import model_point_key, run_model_point
-from .point import point_key, run_point
 from .store import ResultStore
+from .sweep_kinds import sweep_kind
 
 
 # s, how long a given --scheduler has to answer
@@ -40,9 +39,7 @@ TABLE_PARQUET = "results.parquet"
 def point_job(spec):
     """(key function, point function, leading arguments) of ``spec``'s points:
     key(*args, point, settings) and run(*args, point, settings)."""
-    if spec.model is None:
-        return point_key, run_point, ()
-    return model_point_key, run_model_point, (spec.model,)
+    return sweep_kind(spec).point_job(spec)
 
 
 def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,

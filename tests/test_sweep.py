@@ -445,7 +445,7 @@ def test_estimate_is_printed_before_the_run_and_force_runs_above_the_limit(
 
 
 def test_estimate_of_a_run_follows_its_steps():
-    from gpme_study.cost import ROW_PASSES, Sampler, crane_point_plans
+    from gpme_study.point_cost import ROW_PASSES, Sampler, crane_point_plans
     sampler = Sampler(lambda line: None)
     point = {"amplitude": 0.3, "n_rfe": 0}
     short, long_ = (crane_point_plans(point, RunSettings(t_end=t, n_rfe=0, transient=0.1,
