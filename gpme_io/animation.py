@@ -5,9 +5,9 @@ Made with Meshcat, the viewer Pinocchio's and Drake's visualisers use: its three
 drawing commands embedded in the page, as Meshcat's own static HTML export does, so nothing
 is fetched and no server runs.  The scene:
 
-- every shape of the model (gpme_core.geometry; meshes MuJoCo-style files STL, OBJ, DAE
-  embedded while they fit the size budget, else left out) on its link, the links moved
-  through the run's recorded states;
+- every visual shape of the model (gpme_core.geometry; mesh files STL, OBJ, DAE embedded
+  while they fit the size budget, else left out; a model without shapes as a stick figure
+  of its joints) on its link, the links moved through the run's recorded states;
 - the elastic deflection magnified ``magnification`` times: every RFEM coordinate drawn at
   spring_reference + magnification x (q - spring_reference), the rigid coordinates as
   recorded (the page's title says the factor; 1 draws the motion as computed);
@@ -117,6 +117,27 @@ def stick_shapes(model):
     return shapes
 
 
+def _drawn_shapes(shapes, mc_geometry, budget, opacity):
+    """[(shape, drawn)] of what is seen: each link's visual shapes, or its collision shapes
+    when a visual one cannot be drawn (a mesh over the size budget, as a robot's detailed
+    .dae often is, or of a format the viewer does not read; collision meshes are usually
+    the coarse ones)."""
+    by_link = {}
+    for shape in shapes:
+        by_link.setdefault(shape.link_index, []).append(shape)
+    out = []
+    for group in by_link.values():
+        visual = [s for s in group if s.is_visual]
+        drawn = [(s, _shape_object(s, mc_geometry, budget, opacity)) for s in visual]
+        if not visual or any(d is None for _, d in drawn):
+            collision = [s for s in group if s.is_collision and not s.is_visual]
+            if collision:
+                drawn = [(s, _shape_object(s, mc_geometry, budget, opacity))
+                         for s in collision]
+        out += [(s, d) for s, d in drawn if d is not None]
+    return out
+
+
 def displayed(model, q, magnification):
     """(n,) coordinates drawn: the RFEM ones magnified about their spring reference."""
     q = np.array(q, dtype=float)
@@ -163,23 +184,19 @@ def _scene_commands(model, df, magnification, constrained, overlay, max_frames) 
     shapes = model.geometry or stick_shapes(model)
     for label, run, opacity in runs:
         base = mc_path.Path(("meshcat", "robot", _safe(label)))
-        for k, shape in enumerate(shapes):
-            drawn = _shape_object(shape, mc_geometry, budget, opacity)
-            if drawn is None:
-                continue
+        for k, (shape, drawn) in enumerate(_drawn_shapes(shapes, mc_geometry, budget,
+                                                          opacity)):
             geometry, material, fix = drawn
             where = base.append(f"link{shape.link_index}/shape{k}")
             out.append(commands.SetObject(geometry, material, where).lower())
             out.append(commands.SetTransform(shape.origin_array @ fix, where).lower())
         q_all = run[names].to_numpy(float)
-        times = run["t"].to_numpy(float)
         links = sorted({s.link_index for s in shapes})
         for frame, r in enumerate(frames_of(rows, len(run))):
             t_links = link_transforms(model, displayed(model, q_all[r], magnification))
             for link in links:
                 animation.AnimationFrameVisualizer(
                     anim, base.append(f"link{link}"), frame).set_transform(t_links[link])
-        del times
     for name in constrained:
         cols = [f"{a}_{name}" for a in "xyz"]
         if all(c in df for c in cols):

@@ -78,8 +78,8 @@ def test_headless_chromium_draws_and_plays_it(which, tmp_path):
     paths = write_run_outputs(scenario, df, tmp_path)
     page = paths[f"{scenario.name}_motion.html"]
     assert page.stat().st_size <= animation.MAX_BYTES
-    link = max(s.link_index for s in (scenario.model.geometry or
-                                      animation.stick_shapes(scenario.model)))
+    visual = [s for s in scenario.model.geometry if s.is_visual]
+    link = max(s.link_index for s in (visual or animation.stick_shapes(scenario.model)))
     browser = _browser()
     try:
         browser.set_window_size(800, 600)
@@ -93,9 +93,10 @@ def test_headless_chromium_draws_and_plays_it(which, tmp_path):
         t1, m1 = browser.execute_script(probe)
         time.sleep(1.0)
         t2, m2 = browser.execute_script(probe)
-        shot = np.asarray(Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("L"))
+        image = Image.open(io.BytesIO(browser.get_screenshot_as_png())).convert("RGB")
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(shot).save(SCREENSHOTS / f"motion_{which}.png")
+        image.save(SCREENSHOTS / f"motion_{which}.png")
+        shot = np.asarray(image.convert("L"))
     finally:
         browser.quit()
     assert t2 > t1                                          # the animation plays
