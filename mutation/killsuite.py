@@ -1,6 +1,6 @@
 """Run the kill suite for the mutant currently applied to gpme_core/<module>.py.
 
-    python -m mutation.killsuite MODULE [--baseline]
+    python -m mutation.killsuite MODULE [--baseline] [--leave-out TEST_FILE ...]
 
 Which computation path the tests must use follows from where the mutant sits: the file is
 compared with git HEAD, and a mutant inside fast.py or kernels.py (JIT_MODULES) or inside
@@ -8,6 +8,7 @@ an ``if fast.ENABLED:`` block (the dispatch to the compiled kernels in dynamics.
 kinematics.py, gpme.py) is tested with numba on; every other mutant with GPME_NO_JIT=1
 (the numpy reference).  --baseline leaves out tests/test_mutation_kills_*.py and numba's
 bounds checking (the score before them); without it, numba-on runs set NUMBA_BOUNDSCHECK=1.
+--leave-out drops one test file of the suite (repeatable; mutation.run --leave-out).
 
 A fast.py or kernels.py mutant never meets a stale compiled kernel: gpme_core/jit_cache.py
 stamps every cached kernel with the contents of its own file and of the gpme_core modules
@@ -77,6 +78,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     module = argv[0]
     baseline = "--baseline" in argv
+    leave_out = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "--leave-out"]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("GPME_NO_JIT", None)
     if not use_jit(module):
@@ -87,7 +89,7 @@ def main(argv=None):
         # IndexError (the kernels compile ~20 % slower; results are unchanged).
         env["NUMBA_BOUNDSCHECK"] = "1"
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "--no-header", "-p", "no:cacheprovider",
-           *kill_tests(module, not baseline)]
+           *kill_tests(module, not baseline, leave_out)]
     for s in SLOW:
         cmd += ["--deselect", s]
     os.chdir(ROOT)

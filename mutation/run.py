@@ -80,30 +80,33 @@ TIMEOUT = 60.0
 TIMEOUTS = {"kernels": 180.0}
 
 
-def kill_tests(module, with_new=True):
+def kill_tests(module, with_new=True, leave_out=()):
+    """The kill suite's test files for ``module``; leave_out: files (paths from the
+    repository root) left out, e.g. a kill file added after the run it is compared with."""
     new = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests").glob("test_mutation_kills_*.py"))
     own = [f"tests/test_mutation_kills_{module}.py"] if f"tests/test_mutation_kills_{module}.py" in new else []
     files = own + FIRST[module] + CORE + (new if with_new else [])
-    files = list(dict.fromkeys(files))
+    files = [f for f in dict.fromkeys(files) if f not in set(leave_out)]
     if not with_new:
         files = [f for f in files if "mutation_kills" not in f]
     return files
 
 
-def test_command(module, with_new=True):
+def test_command(module, with_new=True, leave_out=()):
     # mutation/killsuite.py picks the computation path from where the mutant sits
     return (f"env PYTHONPATH={ROOT} {PY} -m mutation.killsuite {module}"
-            + ("" if with_new else " --baseline"))
+            + ("" if with_new else " --baseline")
+            + "".join(f" --leave-out {f}" for f in leave_out))
 
 
-def write_config(out, module, with_new=True):
+def write_config(out, module, with_new=True, leave_out=()):
     cfg = out / f"{module}.toml"
     cfg.write_text(
         "[cosmic-ray]\n"
         f'module-path = "gpme_core/{module}.py"\n'
         f"timeout = {TIMEOUTS.get(module, TIMEOUT)}\n"
         "excluded-modules = []\n"
-        f"test-command = {json.dumps(test_command(module, with_new))}\n\n"
+        f"test-command = {json.dumps(test_command(module, with_new, leave_out))}\n\n"
         "[cosmic-ray.distributor]\nname = \"local\"\n")
     return cfg
 
@@ -162,7 +165,7 @@ def copy_rows(src, dst, job_ids):
     con.close()
 
 
-def init(out, modules, sample, seed, with_new, extend=False, sample_fast=0):
+def init(out, modules, sample, seed, with_new, extend=False, sample_fast=0, leave_out=()):
     """Sessions for ``modules`` holding the seeded sample (drawn from the population of ALL
     physics modules of MODULES, so it does not depend on --modules; random.sample's first k
     draws are the sample of size k; a module of OWN_SAMPLE has its own sample of the same
@@ -195,7 +198,7 @@ def init(out, modules, sample, seed, with_new, extend=False, sample_fast=0):
         keys = {spec_key(r) for _, r in chosen}
         for m in modules:
             db = out / f"{m}.sqlite"
-            write_config(out, m, with_new)
+            write_config(out, m, with_new, leave_out)
             if extend and db.exists():
                 have = {spec_key(r) for r in specs(db)}
                 copy_rows(dbs[m], db, [r["job_id"] for r in specs(dbs[m])
@@ -209,6 +212,8 @@ def init(out, modules, sample, seed, with_new, extend=False, sample_fast=0):
             "population_by_module": dict(Counter(m for m, _ in population)),
             "chosen": len(chosen), "chosen_by_module": dict(Counter(m for m, _ in chosen)),
             "sample_fast": sample_fast, "modules": list(modules), "with_new_tests": with_new}
+    if leave_out:
+        meta["left_out"] = list(leave_out)
     (out / "meta.json").write_text(json.dumps(meta, indent=1))
     print(json.dumps(meta, indent=1))
 
@@ -403,6 +408,9 @@ def main(argv=None):
                    help="for fast.py keep only the mutants among the first N draws of the sample")
     p.add_argument("--baseline-suite", action="store_true",
                    help="kill suite without tests/test_mutation_kills_*.py (the 'before' score)")
+    p.add_argument("--leave-out", nargs="+", default=[], metavar="TEST_FILE",
+                   help="kill-suite files left out of the run (e.g. a kill file added "
+                        "after it: the score before that file)")
     p.add_argument("--rerun-survivors", action="store_true")
     p.add_argument("--report", action="store_true", help="only summarise --out")
     p.add_argument("--table", metavar="BEFORE",
@@ -428,7 +436,7 @@ def main(argv=None):
         rerun_survivors(out, a.modules)
         return report(out, a.modules)
     init(out, a.modules, 0 if a.all else a.sample, a.seed, not a.baseline_suite, a.extend,
-         a.sample_fast)
+         a.sample_fast, a.leave_out)
     if a.init_only:
         return None
     exec_all(out, a.modules)
