@@ -5,6 +5,7 @@ adds mass."""
 import re
 import shutil
 import subprocess
+import sysconfig
 import warnings
 from pathlib import Path
 
@@ -19,8 +20,9 @@ from gpme_io.urdf_read.shapes import resolve_mesh
 from gpme_io.urdf_reader import load_urdf
 from gpme_io.urdf_writer import urdf_documents, write_urdf
 
-ROBOTS = (Path(__file__).resolve().parent.parent / ".venv" / "lib" / "python3.11" /
-          "site-packages" / "cmeel.prefix" / "share" / "example-robot-data" / "robots")
+# example-robot-data installed as data (the test extra; cmeel layout), as test_urdf_reader
+ROBOTS = (Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share"
+          / "example-robot-data" / "robots")
 UR5 = ROBOTS / "ur_description" / "urdf" / "ur5_robot.urdf"
 
 
