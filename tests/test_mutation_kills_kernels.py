@@ -13,6 +13,10 @@ by hand, with expected values from closed forms (never from the kernels).
   linear oscillator y' = L y a step of Radau IIA is y -> R(h L) y with the method's
   stability function R(z) = (1 + 2z/5 + z^2/20) / (1 - 3z/5 + 3z^2/20 - z^3/60) (the (2, 3)
   Pade approximant of exp; Hairer & Wanner, Solving ODEs II, IV.5).
+* The Cholesky solve of the reduced matrix on both of its paths (its own loops below
+  kernels.LAPACK_FROM rows, LAPACK's factor from there on): the solution of a symmetric
+  positive definite system (against numpy's LU), and False for a symmetric matrix with a
+  positive diagonal that is not positive definite (a negative eigenvalue by construction).
 """
 import numpy as np
 import pytest
@@ -130,27 +134,49 @@ def test_stale_simplified_newton_would_diverge():
 
 
 @pytest.mark.parametrize("n_steps", [1, 4])
-def test_radau_iia_retries_with_a_fresh_jacobian_when_the_kept_one_fails(n_steps):
-    """A Jacobian kept from earlier steps (age 3) that is far off: the first Newton attempt
-    diverges; the step must be taken again with a fresh Jacobian (not fail), and every step
-    must then be the Radau IIA step R(h L)."""
+def test_radau_iia_renews_a_kept_jacobian_that_no_longer_fits(n_steps):
+    """Two steps keep the Jacobian computed at the first (the oscillator is linear: each
+    stage solve converges in a few iterations); then the kept Jacobian is made to no longer
+    fit (as after a change in the motion) and the loop asked to rebuild its Newton matrix
+    from it.  The first Newton attempt diverges (test above); the step must be taken again
+    with a fresh Jacobian, not fail, and every step must be the Radau IIA step R(h L)."""
     system = ProgrammedMotion(horizontal_oscillator())
     form, reason = compiled.for_system(system)
     assert form is not None, reason
     w_inv, jq, jv, v_prev, ctrl = work = compiled_runs.radau_work(1)
-    jq[:] = STALE_JQ
-    jv[:] = -DAMP
-    ctrl[kernels.R_JAC_AGE] = 3.0         # kept for 3 steps: not fresh, may be renewed
     y0 = np.array([0.1, 0.5, 0.0, 0.0, 0.0])
     y, fail_y = y0.copy(), np.empty_like(y0)
-    status, done, _ = kernels.radau_advance(0.0, y, STEP, n_steps, form.md, form.cd,
-                                            form.options(), system.ic, system.dc, work, fail_y)
+    args = (form.md, form.cd, form.options(), system.ic, system.dc, work, fail_y)
+    status, done, _ = kernels.radau_advance(0.0, y, STEP, 2, *args)
+    assert status == kernels.OK and done == 2
+    # one Jacobian, computed at the first step's start and kept for two steps
+    assert ctrl[kernels.R_JACOBIANS] == 1 and ctrl[kernels.R_JAC_AGE] == 2.0
+    jq[:] = STALE_JQ
+    ctrl[kernels.R_STEP] = np.nan          # rebuild the Newton matrix from the kept Jacobian
+    status, done, _ = kernels.radau_advance(2 * STEP, y, STEP, n_steps, *args)
     assert status == kernels.OK and done == n_steps
-    assert ctrl[kernels.R_JACOBIANS] >= 1           # the fresh one
-    expected = np.linalg.matrix_power(radau_step_matrix(STEP), n_steps) @ y0[:2]
+    assert ctrl[kernels.R_JACOBIANS] == 2                  # the fresh one
+    expected = np.linalg.matrix_power(radau_step_matrix(STEP), 2 + n_steps) @ y0[:2]
     # stage velocities converged to 1e-10 (1 + |v|) (compiled_runs.NEWTON_TOL): q and
     # q_dot agree to ~1e-10 per step
     np.testing.assert_allclose(y[:2], expected, rtol=0, atol=1e-9)
     # the work integral of the damper: positive, and below what it can dissipate (the
     # energy at the start, 0.5 (q_dot^2 + OMEGA2 q^2))
     assert 0.0 < y[2] < 0.5 * (y0[1] ** 2 + OMEGA2 * y0[0] ** 2)
+
+
+# ---------------------------------------------------------------- Cholesky solve
+@pytest.mark.parametrize("r", [5, kernels.LAPACK_FROM, kernels.LAPACK_FROM + 6])
+def test_cholesky_solve_of_positive_definite_and_indefinite_matrices(r):
+    rng = np.random.default_rng(r)
+    b = rng.normal(size=r)
+    half = rng.normal(size=(r, r))
+    spd = half @ half.T + r * np.eye(r)            # eigenvalues >= r
+    x, low = np.zeros(r), np.zeros((r, r))
+    assert kernels._cholesky_solve(spd, b, low, x)
+    np.testing.assert_allclose(x, np.linalg.solve(spd, b), rtol=1e-12, atol=1e-14)
+    # diagonal 1, one off-diagonal pair 2: the block [[1, 2], [2, 1]] has eigenvalue -1
+    indefinite = np.eye(r)
+    indefinite[r - 2, r - 1] = indefinite[r - 1, r - 2] = 2.0
+    assert np.linalg.eigvalsh(indefinite).min() == pytest.approx(-1.0)
+    assert not kernels._cholesky_solve(indefinite, b, np.zeros((r, r)), np.zeros(r))
