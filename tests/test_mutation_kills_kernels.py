@@ -17,6 +17,8 @@ by hand, with expected values from closed forms (never from the kernels).
   kernels.LAPACK_FROM rows, LAPACK's factor from there on): the solution of a symmetric
   positive definite system (against numpy's LU), and False for a symmetric matrix with a
   positive diagonal that is not positive definite (a negative eigenvalue by construction).
+* The compiled reduced solve at the singular-partition threshold, where gpme_core.gpme's
+  rule (singular when rcond <= the threshold) decides, on an rcond exact in floating point.
 """
 import numpy as np
 import pytest
@@ -180,3 +182,21 @@ def test_cholesky_solve_of_positive_definite_and_indefinite_matrices(r):
     indefinite[r - 2, r - 1] = indefinite[r - 1, r - 2] = 2.0
     assert np.linalg.eigvalsh(indefinite).min() == pytest.approx(-1.0)
     assert not kernels._cholesky_solve(indefinite, b, np.zeros((r, r)), np.zeros(r))
+
+
+# ---------------------------------------------------------------- singular partition
+def test_partition_exactly_at_the_singular_threshold_is_singular():
+    """gpme_core.gpme's rule, which the compiled reduced solve shares: a partition is
+    singular when its rcond does not exceed the threshold (rcond <= singular_rcond).  One
+    constraint 2^-40 x_0 + x_1 = 0 with x_0 dependent: A_dc^-1 = 2^40 and ||A||_1 = 1, so
+    the partition rcond 1 / (||A_dc^-1||_1 ||A||_1) is 2^-40 exactly (powers of two)."""
+    tiny = 2.0 ** -40
+    a = np.array([[tiny, 1.0]])
+    ic, dc = np.array([1]), np.array([0])
+    for threshold, status_expected in ((tiny, kernels.SINGULAR_PARTITION), (tiny / 2, kernels.OK)):
+        q_ddot, lam = np.zeros(2), np.zeros(1)
+        ws = np.empty(kernels.reduced_scratch_size(2, 1))
+        status, rel = kernels.reduced_solve(np.eye(2), np.array([0.3, -0.2]), a, np.zeros(1),
+                                            ic, dc, 0.0, threshold, q_ddot, lam, ws)
+        assert rel == tiny
+        assert status == status_expected, (threshold, status)
