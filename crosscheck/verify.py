@@ -34,6 +34,7 @@ from pathlib import Path
 import pandas as pd
 
 from gpme_core.errors import GpmeError, OutputWriteError
+from gpme_examples import paper
 from gpme_io.budget import run_budget
 from gpme_io.example_outputs import write_example_outputs
 from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
@@ -90,7 +91,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
             # the step `gpme simulate` chooses: halved until the run's own checks pass
             # (crosscheck/accurate_step.py), so both commands judge the same run
             choice = run_accurately(run, checks, report=lambda line: log.info(f"    {line}"),
-                                    start="the model file's step")
+                                    start=paper.step_name(scenario) or "the model file's step")
             df, scenario_rows = choice.df, choice.rows
             log.info(f"    {choice.note}")
         else:

@@ -150,8 +150,7 @@ def _simulate_scenarios(args, scenarios):
         df, model_rows = _run_checked(
             scenario.name, run, partial(simulate_rows, scenario), estimate,
             accurate=method == "RK4" and args.dt is None, force=args.force,
-            start=("the paper's step" if scenario.example == paper.EXAMPLE and
-                   scenario.dt in paper.DEFAULT_DT.values() else "the model's step"))
+            start=paper.step_name(scenario) or "the model's step")
         rows += model_rows
         runs.append((scenario, df))
         paths.update(write_run_outputs(scenario, df, args.out))

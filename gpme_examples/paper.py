@@ -15,7 +15,7 @@ from .crane import (DEFAULT_DT, DEFAULT_N_RFE, QUICK_T_END, T_END, CraneParamete
 from gpme_core.elastic_loads import elastic_peaks
 
 __all__ = ["CASES", "DEFAULT_DT", "DEFAULT_N_RFE", "EXAMPLE", "QUICK_T_END", "T_END",
-           "arm_segments", "case_name", "figure_runs", "summary"]
+           "arm_segments", "case_name", "figure_runs", "step_name", "summary"]
 
 # Scenario.example of the paper's crane runs (gpme_io.scenario.crane_scenario)
 EXAMPLE = "crane"
@@ -33,6 +33,14 @@ def arm_segments(scenario) -> int:
     """RFEM segments of the crane's arm in ``scenario`` (a gpme_io.scenario.Scenario of the
     crane; 0 for the rigid arm)."""
     return sum(link.n_segments for link in scenario.model.flexible_links)
+
+
+def step_name(scenario):
+    """"the paper's step" when ``scenario`` is a crane run at one of the paper's RK4 steps
+    (DEFAULT_DT), else None (the caller names the step otherwise)."""
+    if getattr(scenario, "example", None) == EXAMPLE and scenario.dt in DEFAULT_DT.values():
+        return "the paper's step"
+    return None
 
 
 def figure_runs(runs) -> dict:
