@@ -85,8 +85,7 @@ class RigidBodyInertia:
             out.append(f"{label}: inertia tensor must be symmetric, got {inertia.tolist()}")
             return out
         eig = np.linalg.eigvalsh(inertia)
-        tol = max(_INERTIA_TOL * abs(eig).max(), m * POINT_SIZE ** 2 if m > 0 else 0.0)
-        if eig.min() < -tol:
+        if eig.min() < -_moment_tolerance(eig, m):
             out.append(f"{label}: inertia tensor must be positive definite or semi-definite "
                        f"(no negative principal moment), got principal moments {eig.tolist()} "
                        "kg m^2")
@@ -96,10 +95,8 @@ class RigidBodyInertia:
         """kg m^2: I3 - (I1 + I2) of the principal moments I1 <= I2 <= I3 beyond round-off
         (the inertia checks' tolerance), 0.0 for a tensor a physical body can have."""
         eig = np.linalg.eigvalsh(self.inertia_array)
-        m = self.mass
-        tol = max(_INERTIA_TOL * abs(eig).max(), m * POINT_SIZE ** 2 if m > 0 else 0.0)
         excess = float(eig[2] - eig[0] - eig[1])
-        return excess if excess > tol else 0.0
+        return excess if excess > _moment_tolerance(eig, self.mass) else 0.0
 
     def non_physical(self, label):
         """What is not physical about this (valid) inertia, accepted all the same: the
@@ -116,6 +113,12 @@ class RigidBodyInertia:
     def pseudo_inertia(self):
         """(4, 4) kg m^2 / kg m / kg pseudo-inertia H in the body frame."""
         return pseudo_inertia(self.mass, self.com_array, self.inertia_array)
+
+
+def _moment_tolerance(moments, mass):
+    """kg m^2: what a principal moment may be off by and still count as round-off (or a
+    point mass): _INERTIA_TOL of the largest moment, or the moment of a POINT_SIZE body."""
+    return max(_INERTIA_TOL * abs(moments).max(), mass * POINT_SIZE ** 2 if mass > 0 else 0.0)
 
 
 def pseudo_inertia(mass, com, inertia_about_com):

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from gpme_core.geometry import ELEMENT_RGBA, RIGID_RGBA, Shape, member
+from gpme_core import transforms as tf
 from gpme_core.kinematics import link_transforms
 
 from .atomic import atomic_write_text
@@ -61,20 +62,23 @@ def _colour(rgba):
     return (r << 16) | (g << 8) | b
 
 
-def _shape_object(shape, mc_geometry, mesh_budget, opacity):
-    """(meshcat geometry, material, (4, 4) correction) of a shape, or None when it cannot
-    be drawn (a mesh over the budget or of another format)."""
-    material = mc_geometry.MeshLambertMaterial(color=_colour(shape.rgba), opacity=opacity,
-                                               transparent=opacity < 1.0)
+def _material(mc_geometry, shape, opacity):
+    """The shape's colour, at ``opacity`` (a ghost run is translucent)."""
+    return mc_geometry.MeshLambertMaterial(color=_colour(shape.rgba), opacity=opacity,
+                                           transparent=opacity < 1.0)
+
+
+def _shape_object(shape, mc_geometry, mesh_budget):
+    """(meshcat geometry, (4, 4) correction) of a shape, or None when it cannot be drawn
+    (a mesh over the budget or of another format)."""
     fix = np.eye(4)
     if shape.kind == "box":
-        return mc_geometry.Box(list(shape.size)), material, fix
+        return mc_geometry.Box(list(shape.size)), fix
     if shape.kind == "sphere":
-        return mc_geometry.Sphere(shape.size[0]), material, fix
+        return mc_geometry.Sphere(shape.size[0]), fix
     if shape.kind == "cylinder":
-        fix = np.array([[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1.0]])
         # three.js cylinders run along y, URDF's along z: turned +90 deg about x
-        return mc_geometry.Cylinder(shape.size[1], shape.size[0]), material, fix
+        return mc_geometry.Cylinder(shape.size[1], shape.size[0]), tf.rot_x(np.pi / 2)
     fmt = _MESH_FORMATS.get(Path(shape.mesh).suffix.lower())
     path = Path(shape.mesh)
     if fmt is None or not path.is_file() or path.stat().st_size > mesh_budget[0]:
@@ -85,7 +89,7 @@ def _shape_object(shape, mc_geometry, mesh_budget, opacity):
     reader = {"stl": mc_geometry.StlMeshGeometry, "obj": mc_geometry.ObjMeshGeometry,
               "dae": mc_geometry.DaeMeshGeometry}[fmt]
     scale = np.diag(list(shape.size) + [1.0])
-    return reader.from_file(str(path)), material, scale
+    return reader.from_file(str(path)), scale
 
 
 def stick_shapes(model):
@@ -117,8 +121,8 @@ def stick_shapes(model):
     return shapes
 
 
-def _drawn_shapes(shapes, mc_geometry, budget, opacity):
-    """[(shape, drawn)] of what is seen: each link's visual shapes, or its collision shapes
+def _drawn_shapes(shapes, mc_geometry, budget):
+    """[(shape, (geometry, correction))] of what is seen, each mesh read once: each link's visual shapes, or its collision shapes
     when a visual one cannot be drawn (a mesh over the size budget, as a robot's detailed
     .dae often is, or of a format the viewer does not read; collision meshes are usually
     the coarse ones)."""
@@ -128,12 +132,11 @@ def _drawn_shapes(shapes, mc_geometry, budget, opacity):
     out = []
     for group in by_link.values():
         visual = [s for s in group if s.is_visual]
-        drawn = [(s, _shape_object(s, mc_geometry, budget, opacity)) for s in visual]
+        drawn = [(s, _shape_object(s, mc_geometry, budget)) for s in visual]
         if not visual or any(d is None for _, d in drawn):
             collision = [s for s in group if s.is_collision and not s.is_visual]
             if collision:
-                drawn = [(s, _shape_object(s, mc_geometry, budget, opacity))
-                         for s in collision]
+                drawn = [(s, _shape_object(s, mc_geometry, budget)) for s in collision]
         out += [(s, d) for s, d in drawn if d is not None]
     return out
 
@@ -180,14 +183,13 @@ def _scene_commands(model, df, magnification, constrained, overlay, max_frames) 
     out = []
     anim = animation.Animation(default_framerate=FPS)
     runs = [("gpme", df, 1.0)] + ([(overlay[0], overlay[1], 0.35)] if overlay else [])
-    budget = [MAX_MESH_BYTES]
     shapes = model.geometry or stick_shapes(model)
+    drawn = _drawn_shapes(shapes, mc_geometry, [MAX_MESH_BYTES])   # for every run
     for label, run, opacity in runs:
         base = mc_path.Path(("meshcat", "robot", _safe(label)))
-        for k, (shape, drawn) in enumerate(_drawn_shapes(shapes, mc_geometry, budget,
-                                                          opacity)):
-            geometry, material, fix = drawn
+        for k, (shape, (geometry, fix)) in enumerate(drawn):
             where = base.append(f"link{shape.link_index}/shape{k}")
+            material = _material(mc_geometry, shape, opacity)
             out.append(commands.SetObject(geometry, material, where).lower())
             out.append(commands.SetTransform(shape.origin_array @ fix, where).lower())
         q_all = run[names].to_numpy(float)

@@ -35,6 +35,17 @@ def _stripped(text):
     return re.sub(r"<(visual|collision)>.*?</\1>", "", text, flags=re.S)
 
 
+def _pybullet_visuals(urdf):
+    """How many visual shapes PyBullet loads from ``urdf`` (a third reader)."""
+    pybullet = pytest.importorskip("pybullet")
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        body = pybullet.loadURDF(str(urdf), physicsClientId=client)
+        return len(pybullet.getVisualShapeData(body, physicsClientId=client))
+    finally:
+        pybullet.disconnect(client)
+
+
 @pytest.fixture(scope="module")
 def crane_urdf(tmp_path_factory):
     path = tmp_path_factory.mktemp("urdf") / "crane_flexible_n3.urdf"
@@ -72,13 +83,7 @@ def test_the_written_urdf_loads_with_its_geometry_everywhere(crane_urdf):
     assert pin.buildGeomFromUrdf(model, str(crane_urdf), pin.GeometryType.VISUAL).ngeoms == 7
     assert pin.buildGeomFromUrdf(model, str(crane_urdf),
                                  pin.GeometryType.COLLISION).ngeoms == 2
-    pybullet = pytest.importorskip("pybullet")
-    client = pybullet.connect(pybullet.DIRECT)
-    try:
-        body = pybullet.loadURDF(str(crane_urdf), physicsClientId=client)
-        assert len(pybullet.getVisualShapeData(body, physicsClientId=client)) == 7
-    finally:
-        pybullet.disconnect(client)
+    assert _pybullet_visuals(crane_urdf) == 7
     mujoco = pytest.importorskip("mujoco")
     with_shapes = mujoco.MjModel.from_xml_path(str(crane_urdf))
     assert with_shapes.ngeom == 9                     # MuJoCo keeps visuals (group 1) too
@@ -137,13 +142,7 @@ def test_a_users_meshes_are_kept_with_their_paths_resolved(tmp_path):
     path, _ = write_urdf(res.model, tmp_path / "ur5.urdf")
     model = pin.buildModelFromUrdf(str(path))
     assert pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.VISUAL).ngeoms == 6
-    pybullet = pytest.importorskip("pybullet")
-    client = pybullet.connect(pybullet.DIRECT)
-    try:
-        body = pybullet.loadURDF(str(path), physicsClientId=client)
-        assert len(pybullet.getVisualShapeData(body, physicsClientId=client)) == 6
-    finally:
-        pybullet.disconnect(client)
+    assert _pybullet_visuals(path) == 6
 
 
 def test_package_and_relative_mesh_paths_resolve_as_the_engines_do(tmp_path, monkeypatch):
