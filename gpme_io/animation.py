@@ -19,6 +19,7 @@ Frames are subsampled so the file stays under ``max_bytes`` (default 3 MB).
 """
 import base64
 import json
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,8 @@ from gpme_core import transforms as tf
 from gpme_core.kinematics import link_transforms
 
 from .atomic import atomic_write_text
+
+log = logging.getLogger("gpme.animation")
 
 # the largest page written (bytes): the viewer is ~0.85 MB, the rest the scene and frames
 MAX_BYTES = 3_000_000
@@ -184,7 +187,8 @@ def _scene_commands(model, df, magnification, constrained, overlay, max_frames) 
     anim = animation.Animation(default_framerate=FPS)
     runs = [("gpme", df, 1.0)] + ([(overlay[0], overlay[1], 0.35)] if overlay else [])
     shapes = model.geometry or stick_shapes(model)
-    drawn = _drawn_shapes(shapes, mc_geometry, [MAX_MESH_BYTES])   # for every run
+    # every run embeds the meshes again (one object per run): the budget is shared out
+    drawn = _drawn_shapes(shapes, mc_geometry, [MAX_MESH_BYTES // len(runs)])
     for label, run, opacity in runs:
         base = mc_path.Path(("meshcat", "robot", _safe(label)))
         for k, (shape, (geometry, fix)) in enumerate(drawn):
@@ -269,8 +273,14 @@ def _html(text):
 
 
 def write_motion(model, df, path, title, magnification=DEFAULT_MAGNIFICATION,
-                 constrained=(), overlay=None) -> Path:
-    """Write :func:`motion_page` to ``path`` atomically; returns the path."""
-    atomic_write_text(Path(path), motion_page(model, df, title, magnification, constrained,
-                                              overlay))
+                 constrained=(), overlay=None):
+    """Write :func:`motion_page` to ``path`` atomically; returns the path, or None when the
+    page would exceed MAX_BYTES (a warning says so: no page is better than a run or a
+    report step lost for it)."""
+    try:
+        page = motion_page(model, df, title, magnification, constrained, overlay)
+    except ValueError as exc:
+        log.warning("%s: no 3D animation: %s", model.name, exc)
+        return None
+    atomic_write_text(Path(path), page)
     return Path(path)

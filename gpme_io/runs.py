@@ -1,7 +1,6 @@
 """Run a scenario with gpme and write its history and figures (used by `gpme simulate` and
 the gpme step of `gpme verify`)."""
 import json
-import logging
 from pathlib import Path
 
 from gpme_io.atomic import (HISTORY_DIGITS, atomic_save_figure, atomic_write_csv,
@@ -15,8 +14,6 @@ from gpme_io.file_names import named_path
 from gpme_io.progress import progress_callback
 
 from . import animation, figures
-
-log = logging.getLogger("gpme.runs")
 
 
 def resolved_step(scenario, dt=None):
@@ -108,9 +105,7 @@ def write_run_outputs(scenario, df, out_dir, compressed=False):
         frames = [f for f in dict.fromkeys(getattr(c, "frame", None)
                                            for c in scenario.constraints) if f]
         title = f"{df.attrs.get('method', 'RK4')}, {float(df['t'].iloc[-1]):g} s"
-        try:
-            paths[path.name] = animation.write_motion(scenario.model, df, path, title,
-                                                      constrained=frames)
-        except ValueError as exc:         # over the page's size budget: said, not written
-            log.warning("%s: no 3D animation: %s", scenario.name, exc)
+        written = animation.write_motion(scenario.model, df, path, title, constrained=frames)
+        if written is not None:           # None: over the page's size budget, said
+            paths[path.name] = written
     return paths

@@ -34,6 +34,26 @@ def test_the_page_is_self_contained_and_small(crane_run, tmp_path):
     assert "MeshCat.Viewer" in text and "elastic deflection x20" in text
 
 
+def test_a_ghost_run_keeps_the_page_under_its_size_and_an_oversized_page_is_skipped(
+        tmp_path, monkeypatch):
+    """The UR5's meshes fill the budget: with another engine's run as a ghost (its meshes
+    embedded again) the page still stays under MAX_BYTES; a page that cannot is not
+    written and the caller goes on (a report step once crashed on it)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scenario = load_model_file(REPO / "models" / "ur5_flexible_forearm.toml")
+    df = simulate_scenario(scenario, t_end=0.2)
+    page = animation.motion_page(scenario.model, df, "x", overlay=("MuJoCo", df))
+    assert len(page.encode("utf-8")) <= animation.MAX_BYTES
+
+    def too_large(*args, **kwargs):
+        raise ValueError("needs 4.0 MB")
+    monkeypatch.setattr(animation, "motion_page", too_large)
+    assert animation.write_motion(scenario.model, df, tmp_path / "m.html", "x") is None
+    assert not (tmp_path / "m.html").exists()
+
+
 def test_the_deflection_is_magnified_about_the_spring_reference(crane_run):
     scenario, df = crane_run
     model = scenario.model
