@@ -24,23 +24,26 @@ BATCH = 400
 
 @numba.njit
 def _loop_chain(count, md, q):
-    origins, generators, is_revolute = kernels.model_parts(md)[:3]
+    parts = kernels.model_parts(md)
+    origins, generators, is_revolute, parents = parts[0], parts[1], parts[2], parts[10]
     for _ in range(count):
-        fast.chain(origins, generators, is_revolute, q)
+        fast.chain(origins, generators, is_revolute, parents, q)
 
 
 @numba.njit
 def _loop_terms(count, md, t_all, s_all, q_dot):
-    pseudo, gamma = kernels.model_parts(md)[3:5]
+    parts = kernels.model_parts(md)
+    pseudo, gamma, parents, moves = parts[3], parts[4], parts[10], parts[11]
     for _ in range(count):
-        fast.terms(t_all, s_all, pseudo, gamma, q_dot)
+        fast.terms(t_all, s_all, pseudo, gamma, parents, moves, q_dot)
 
 
 @numba.njit
-def _loop_rows(count, t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa):
+def _loop_rows(count, t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa):
     ws = np.empty(kernels.rows_scratch_size(q.shape[0], cd[0][1]))
     for _ in range(count):
-        kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws)
+        kernels.constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa,
+                                ws)
 
 
 @numba.njit
@@ -71,17 +74,19 @@ def profile(n_rfe, t=0.37, seed=0):
     if cs is None:
         raise SystemExit(f"not compiled: {why}")
     md, cd = cs.md, cs.cd
-    t_all, s_all, m_mat, h, g = fast.chain_and_terms(*kernels.model_parts(md)[:5], q, q_dot)
+    parts = kernels.model_parts(md)
+    moves = parts[11]
+    t_all, s_all, m_mat, h, g = fast.chain_and_terms(*parts[:5], parts[10], moves, q, q_dot)
     k, n = system.n_constraints, q.size
     phi, phi_dot, kappa, a = np.empty(k), np.empty(k), np.empty(k), np.empty((k, n))
-    kernels.constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa,
+    kernels.constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa,
                             np.empty(kernels.rows_scratch_size(n, cs.n_points)))
     c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
     out = np.empty(n), np.empty(k)
     return {"n_rfe": n_rfe, "coordinates": n,
             "chain T, S": _us(_loop_chain, md, q),
             "terms M, h, g": _us(_loop_terms, md, t_all, s_all, q_dot),
-            "constraint rows": _us(_loop_rows, t, q, q_dot, t_all, s_all, cd, phi, phi_dot,
+            "constraint rows": _us(_loop_rows, t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot,
                                    a, kappa),
             "reduced solve": _us(_loop_reduced, m_mat, h - g, a, c, system.ic, system.dc, *out),
             "whole evaluate": _us(_loop_evaluate, t, q, q_dot, md, cd, cs.options(),

@@ -145,7 +145,9 @@ def pack(system):
                                           model.spring_reference, model.damping,
                                           model.lower_limits, model.upper_limits]),
                                 dtype=float)
-    md = (mats, vecs, np.ascontiguousarray(model.gamma, dtype=float))
+    md = (mats, vecs, np.ascontiguousarray(model.gamma, dtype=float),
+          np.ascontiguousarray(model.parents, dtype=np.int64),
+          np.ascontiguousarray(model.moves, dtype=np.bool_))
     return md, cd, tables.user_points, tables.user_times
 
 

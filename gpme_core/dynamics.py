@@ -1,4 +1,4 @@
-"""Trace-form dynamics terms of an unconstrained serial chain.
+"""Trace-form dynamics terms of an unconstrained kinematic tree (a serial chain or not).
 
 Equation of motion (Lagrange's equations of the second kind), paper's sign convention:
 
@@ -10,9 +10,11 @@ Equation of motion (Lagrange's equations of the second kind), paper's sign conve
     f    = K (q - q_ref)   (springs),  d = D q_dot  (dampers: d = dR/dq_dot),
     t    = drive forces.
 
-All sums over l run over l >= max(i, j) only (chain structure); with the composite
-world pseudo-inertias Hc_k = sum_{l>=k} T^(l) H^(l) T^(l)T the mass matrix is
-m_ij = tr(S_i Hc_max(i,j) S_j^T), O(n^2).  Units: SI (kg, m, s, rad, N, N m).
+All sums over l run over the links that both i and j move only (tree structure,
+gpme_core.kinematics; in a serial chain l >= max(i, j)); with the composite world
+pseudo-inertias of the subtrees, Hc_k = sum_{l in subtree(k)} T^(l) H^(l) T^(l)T, the
+mass matrix is m_ij = tr(S_i Hc_j S_j^T) when i moves j (i <= j), 0 when neither of i, j
+moves the other (two branches), O(n^2).  Units: SI (kg, m, s, rad, N, N m).
 """
 from dataclasses import dataclass
 
@@ -34,32 +36,39 @@ def world_pseudo_inertias(model, kin):
     return kin.T @ model.pseudo_inertias @ np.swapaxes(kin.T, 1, 2)
 
 
-def _reverse_cumsum(a):
-    return np.cumsum(a[::-1], axis=0)[::-1]
+def subtree_sums(a, parents):
+    """(n, ...) c_k = sum of a_l over the subtree of link k (k and its descendants);
+    parents (n,) parent link indices, -1 the world, each < its child's index."""
+    out = np.array(a, dtype=float, copy=True)
+    for l in range(len(parents) - 1, -1, -1):
+        if parents[l] >= 0:
+            out[parents[l]] += out[l]
+    return out
 
 
 def mass_matrix(model, q):
     """(n, n) mass matrix M, m_ij = sum_l tr(T_i^(l) H^(l) T_j^(l)T); q (n,) or kinematics."""
     kin = _as_kin(model, q)
-    composite = _reverse_cumsum(world_pseudo_inertias(model, kin))
+    composite = subtree_sums(world_pseudo_inertias(model, kin), model.parents)
     y = kin.S @ composite                           # S_j Hc_j  (Hc symmetric)
     e = np.einsum("iab,jab->ij", kin.S, y)          # e_ij = tr(S_i Hc_j S_j^T)
-    upper = np.triu(e)
-    return upper + np.triu(e, 1).T
+    upper = np.where(model.moves, e, 0.0)           # i moves j: i <= j on j's path
+    return upper + np.triu(upper, 1).T
 
 
 def velocity_product_terms(model, q, q_dot):
     """(n,) h = -(Coriolis and centrifugal terms), M q_ddot = h + Q."""
     kin = _as_kin(model, q)
-    b = velocity_product_accelerations(kin.S, q_dot)
-    g_acc = _reverse_cumsum(b @ world_pseudo_inertias(model, kin))
+    b = velocity_product_accelerations(kin.S, q_dot, model.parents)
+    g_acc = subtree_sums(b @ world_pseudo_inertias(model, kin), model.parents)
     return -np.einsum("iab,iab->i", kin.S, g_acc)
 
 
 def gravity_forces(model, q):
     """(n,) g = dE_p,g/dq (the generalized gravity force is -g)."""
     kin = _as_kin(model, q)
-    first_moments = _reverse_cumsum(kin.T @ model.pseudo_inertias[:, :, 3:4])[:, :, 0]
+    first_moments = subtree_sums(kin.T @ model.pseudo_inertias[:, :, 3:4],
+                                 model.parents)[:, :, 0]
     return -np.einsum("a,iab,ib->i", model.gamma, kin.S, first_moments)
 
 
@@ -87,7 +96,7 @@ def generalized_forces(model, t, q, q_dot):
 def kinetic_energy(model, q, q_dot):
     """J, E_k = 1/2 sum_l tr(T_dot^(l) H^(l) T_dot^(l)T) (computed in trace form)."""
     kin = _as_kin(model, q)
-    v = twist_velocities(kin.S, q_dot)
+    v = twist_velocities(kin.S, q_dot, model.parents)
     hw = world_pseudo_inertias(model, kin)
     return 0.5 * float(np.einsum("lab,lbc,lac->", v, hw, v))
 
@@ -148,8 +157,8 @@ def dynamics_terms(model, t, q, q_dot):
     if fast.ENABLED:
         t_all, s_all, m, h, g = fast.run(
             fast.chain_and_terms, model.origins, model.generators, model.is_revolute,
-            model.pseudo_inertias, model.gamma, q, q_dot)
-        return DynamicsTerms(ChainKinematics(q, t_all, s_all), m, h, g,
+            model.pseudo_inertias, model.gamma, model.parents, model.moves, q, q_dot)
+        return DynamicsTerms(ChainKinematics(q, t_all, s_all, model.moves), m, h, g,
                              model.stiffness * (q - model.spring_reference),
                              model.damping * q_dot, model.drive_forces(t))
     kin = chain_kinematics(model, q)

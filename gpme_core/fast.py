@@ -6,7 +6,9 @@ numpy reference; tests/test_fast.py checks both agree to round-off), written as 
 overhead.  Set the environment variable GPME_NO_JIT=1 to use the numpy reference instead.
 
 Shapes: n coordinates; origins, generators, pseudo_inertias (n, 4, 4); q, q_dot (n,);
-gamma (4,) = (gravity, 0).
+gamma (4,) = (gravity, 0); parents (n,) int64, the parent link of each joint (-1 the
+world, < the joint's index); moves (n, n) bool, moves[i, l] when joint i moves link l
+(model.parents, model.moves: a kinematic tree, a serial chain when parents[k] = k - 1).
 """
 import os
 
@@ -103,17 +105,17 @@ def _mm3_acc(a, b, scale, out):
 
 
 @_jit
-def chain(origins, generators, is_revolute, q):
+def chain(origins, generators, is_revolute, parents, q):
     """(T, S): world transforms T^(l) and world twist matrices S_l = T^(l) Q_l T^(l)^-1."""
     n = q.shape[0]
     t_all = np.empty((n, 4, 4))
     s_all = np.empty((n, 4, 4))
-    chain_into(origins, generators, is_revolute, q, t_all, s_all, np.empty((2, 4, 4)))
+    chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, np.empty((2, 4, 4)))
     return t_all, s_all
 
 
 @_jit
-def chain_into(origins, generators, is_revolute, q, t_all, s_all, scratch):
+def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scratch):
     """:func:`chain` into t_all, s_all (n, 4, 4); scratch (2, 4, 4) work space."""
     n = q.shape[0]
     motion = scratch[0]
@@ -135,10 +137,10 @@ def chain_into(origins, generators, is_revolute, q, t_all, s_all, scratch):
             for i in range(3):
                 motion[i, 3] = g[i, 3] * q[k]
         _mm4(origins[k], motion, local)
-        if k == 0:
-            t_all[0, :, :] = local
+        if parents[k] < 0:
+            t_all[k, :, :] = local
         else:
-            _mm4(t_all[k - 1], local, t_all[k])
+            _mm4(t_all[parents[k]], local, t_all[k])
         acc = t_all[k]
         if is_revolute[k]:
             # S = [[W, -W p], [0, 0]],  W = R K R^T = skew(R k): the axis k = (K[2, 1],
@@ -158,13 +160,13 @@ def chain_into(origins, generators, is_revolute, q, t_all, s_all, scratch):
 
 
 @_jit
-def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
+def terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot):
     """(M (n, n), h (n,), g (n,)) in trace form with composite world pseudo-inertias."""
     n = q_dot.shape[0]
     m = np.empty((n, n))
     h = np.empty(n)
     g = np.empty(n)
-    terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g,
+    terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h, g,
                np.empty(terms_scratch_size(n)))
     return m, h, g
 
@@ -172,22 +174,30 @@ def terms(t_all, s_all, pseudo_inertias, gamma, q_dot):
 @_jit
 def terms_scratch_size(n):
     """Length of the float scratch of :func:`terms_into` for n coordinates."""
-    return 2 * 16 * n + 4 * n + 12 * n + n + 7 * 16 + 4
+    return 6 * 16 * n + 2 * 4 * n + 12 * n + n + 3 * 16
 
 
 @_jit
-def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
-    """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),)."""
+def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h, g,
+               scratch):
+    """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),).
+
+    Per link l: hw_l = T H T^T (world pseudo-inertia), first_l its last column; per
+    joint, over its subtree (gpme_core.dynamics): hc (composite pseudo-inertia), gc
+    (sum of B_l hw_l), wc (first moments), accumulated from the leaves to the root."""
     n = q_dot.shape[0]
     hw = scratch[:16 * n].reshape((n, 4, 4))
-    b_all = scratch[16 * n:32 * n].reshape((n, 4, 4))
-    first = scratch[32 * n:36 * n].reshape((n, 4))
-    s_rows = scratch[36 * n:48 * n].reshape((12, n))
-    column = scratch[48 * n:49 * n]
-    small = scratch[49 * n:49 * n + 7 * 16].reshape((7, 4, 4))
-    wacc = scratch[49 * n + 7 * 16:49 * n + 7 * 16 + 4]
-    th, v_prev, b_prev, tmp, hc, gacc, y = (small[0], small[1], small[2], small[3],
-                                            small[4], small[5], small[6])
+    hc = scratch[16 * n:32 * n].reshape((n, 4, 4))
+    gc = scratch[32 * n:48 * n].reshape((n, 4, 4))
+    b_all = scratch[48 * n:64 * n].reshape((n, 4, 4))
+    v_all = scratch[64 * n:80 * n].reshape((n, 4, 4))
+    w_all = scratch[80 * n:96 * n].reshape((n, 4, 4))
+    first = scratch[96 * n:100 * n].reshape((n, 4))
+    wc = scratch[100 * n:104 * n].reshape((n, 4))
+    s_rows = scratch[104 * n:116 * n].reshape((12, n))
+    column = scratch[116 * n:117 * n]
+    small = scratch[117 * n:117 * n + 3 * 16].reshape((3, 4, 4))
+    th, tmp, y = small[0], small[1], small[2]
     for l in range(n):
         _mm4(t_all[l], pseudo_inertias[l], th)
         tl = t_all[l]
@@ -199,25 +209,27 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
                 hw[l, i, j] = v
                 hw[l, j, i] = v
             first[l, i] = th[i, 3]
+            wc[l, i] = 0.0
+            for j in range(4):
+                hc[l, i, j] = 0.0
+                gc[l, i, j] = 0.0
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
-    # B_l = B_{l-1} + (2 V_{l-1} + S_l qd_l) S_l qd_l
-    for i in range(4):
-        wacc[i] = 0.0
-        for j in range(4):
-            v_prev[i, j] = 0.0
-            b_prev[i, j] = 0.0
-            hc[i, j] = 0.0
-            gacc[i, j] = 0.0
+    # B_l = B_p(l) + (2 V_p(l) + S_l qd_l) S_l qd_l,  V_l = V_p(l) + S_l qd_l
     for l in range(n):
         w = q_dot[l]
+        p = parents[l]
         for i in range(4):
             for j in range(4):
-                tmp[i, j] = 2.0 * v_prev[i, j] + s_all[l, i, j] * w
-        _mm3_acc(tmp, s_all[l], w, b_prev)
-        b_all[l] = b_prev
-        for i in range(4):
-            for j in range(4):
-                v_prev[i, j] += s_all[l, i, j] * w
+                sw = s_all[l, i, j] * w
+                if p < 0:
+                    tmp[i, j] = sw
+                    b_all[l, i, j] = 0.0
+                    v_all[l, i, j] = sw
+                else:
+                    tmp[i, j] = 2.0 * v_all[p, i, j] + sw
+                    b_all[l, i, j] = b_all[p, i, j]
+                    v_all[l, i, j] = v_all[p, i, j] + sw
+        _mm3_acc(tmp, s_all[l], w, b_all[l])
     # S has a zero last row: the traces run over its first three rows only.  s_rows[e, i]
     # is entry e = 4 a + c (a < 3) of S_i, so that each m_ij below is a sum over e of
     # contiguous, vectorisable products (summed in the same order as tr(S_i Y^T)).
@@ -226,12 +238,13 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
             for c in range(4):
                 s_rows[4 * a + c, i] = s_all[i, a, c]
     for j in range(n - 1, -1, -1):
+        hcj = hc[j]
         for a in range(4):
             for c in range(4):
-                hc[a, c] += hw[j, a, c]
-            wacc[a] += first[j, a]
-        _mm3_acc(b_all[j], hw[j], 1.0, gacc)
-        _mm3(s_all[j], hc, y)
+                hcj[a, c] += hw[j, a, c]
+            wc[j, a] += first[j, a]
+        _mm3_acc(b_all[j], hw[j], 1.0, gc[j])
+        _mm3(s_all[j], hcj, y)
         for i in range(j + 1):
             column[i] = 0.0
         for a in range(3):
@@ -240,30 +253,42 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, q_dot, m, h, g, scratch):
                 row = s_rows[4 * a + c]
                 for i in range(j + 1):
                     column[i] += row[i] * yac
+        # m_ij = tr(S_i Hc_j S_j^T) where joint i moves link j, else 0 (other branches)
         for i in range(j + 1):
-            m[i, j] = column[i]
-            m[j, i] = column[i]
+            v = column[i] if moves[i, j] else 0.0
+            m[i, j] = v
+            m[j, i] = v
         acc = 0.0
         for a in range(3):
             for c in range(4):
-                acc += s_all[j, a, c] * gacc[a, c]
+                acc += s_all[j, a, c] * gc[j, a, c]
         h[j] = -acc
         gj = 0.0
         for a in range(3):
             sw = 0.0
             for c in range(4):
-                sw += s_all[j, a, c] * wacc[c]
+                sw += s_all[j, a, c] * wc[j, c]
             gj += gamma[a] * sw
         g[j] = -gj
+        p = parents[j]
+        if p >= 0:
+            for a in range(4):
+                for c in range(4):
+                    hc[p, a, c] += hcj[a, c]
+                    gc[p, a, c] += gc[j, a, c]
+                wc[p, a] += wc[j, a]
 
 
 @_jit
-def point(t_all, s_all, q_dot, link, r_local):
-    """(position (3,), velocity (3,), jacobian (3, n), drift (3,)) of a point fixed on link."""
+def point(t_all, s_all, moves, q_dot, link, r_local, w_hom=1.0):
+    """(position (3,), velocity (3,), jacobian (3, n), drift (3,)) of a point fixed on link
+    (w_hom = 1; r_local (3,) m in the link frame) or of a direction (w_hom = 0: a vector
+    r_local turned with the link, 1 for a unit vector)."""
     n = q_dot.shape[0]
     pos, vel, drift = np.empty(3), np.empty(3), np.empty(3)
     jac = np.empty((3, n))
-    point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, np.empty(POINT_SCRATCH))
+    point_into(t_all, s_all, moves, q_dot, link, r_local, w_hom, pos, vel, jac, drift,
+               np.empty(POINT_SCRATCH))
     return pos, vel, jac, drift
 
 
@@ -271,14 +296,15 @@ POINT_SCRATCH = 28          # floats of point_into's scratch: rw (4), col (4), v
 
 
 @_jit
-def point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, scratch):
+def point_into(t_all, s_all, moves, q_dot, link, r_local, w_hom, pos, vel, jac, drift,
+               scratch):
     """:func:`point` into pos (3,), vel (3,), jac (3, n), drift (3,); scratch (POINT_SCRATCH,)."""
     n = q_dot.shape[0]
     rw = scratch[0:4]
     col = scratch[4:8]
     v_prev = scratch[8:24].reshape((4, 4))
     r = scratch[24:28]
-    r[0], r[1], r[2], r[3] = r_local[0], r_local[1], r_local[2], 1.0
+    r[0], r[1], r[2], r[3] = r_local[0], r_local[1], r_local[2], w_hom
     for i in range(4):
         acc = 0.0
         for c in range(4):
@@ -292,9 +318,14 @@ def point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, scratch
     for a in range(4):
         for c in range(4):
             v_prev[a, c] = 0.0
-    # p_dot = sum S_i qd_i r_w;  drift = B r_w with B from the recursion, applied to r_w
-    # directly: B r_w = sum_l (2 V_{l-1} + S_l qd_l) S_l qd_l r_w
+    # p_dot = sum S_i qd_i r_w;  drift = B r_w with B from the recursion along the path
+    # of joints that move the link (a serial chain), applied to r_w directly:
+    # B r_w = sum_l (2 V_{l-1} + S_l qd_l) S_l qd_l r_w
     for l in range(link + 1):
+        if not moves[l, link]:
+            for a in range(3):
+                jac[a, l] = 0.0
+            continue
         for a in range(4):
             acc = 0.0
             for c in range(4):
@@ -318,10 +349,11 @@ def point_into(t_all, s_all, q_dot, link, r_local, pos, vel, jac, drift, scratch
 
 
 @_jit
-def chain_and_terms(origins, generators, is_revolute, pseudo_inertias, gamma, q, q_dot):
+def chain_and_terms(origins, generators, is_revolute, pseudo_inertias, gamma, parents, moves,
+                    q, q_dot):
     """(T, S, M, h, g) in one compiled call (see :func:`chain` and :func:`terms`)."""
-    t_all, s_all = chain(origins, generators, is_revolute, q)
-    m, h, g = terms(t_all, s_all, pseudo_inertias, gamma, q_dot)
+    t_all, s_all = chain(origins, generators, is_revolute, parents, q)
+    m, h, g = terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot)
     return t_all, s_all, m, h, g
 
 

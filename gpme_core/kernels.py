@@ -22,7 +22,8 @@ gpme_core.compiled.pack):
 
     md = (mats (3, n, 4, 4): origins, generators, pseudo_inertias; vecs (6, n):
           is_revolute (0/1), stiffness, spring_reference, damping, lower_limits,
-          upper_limits; gamma (4,))                      -> :func:`model_parts`
+          upper_limits; gamma (4,); parents (n,) int64; moves (n, n) bool: the tree,
+          gpme_core.fast)                                -> :func:`model_parts`
     cd = (ci int64: m, P, F, D, c_kind (m), c_point (m), c_fun (m), p_link (P), f_kind (F),
           f_off (F), d_coord (D), d_fun (D); cf float: c_par (m, 4), p_r (P, 3) m, f_par)
                                                          -> :func:`constraint_parts`
@@ -94,10 +95,10 @@ def user_time_terms(index, t, out):
 @_jit
 def model_parts(md):
     """(origins, generators, is_revolute, pseudo_inertias, gamma, stiffness,
-    spring_reference, damping, lower_limits, upper_limits) views of md."""
-    mats, vecs, gamma = md
+    spring_reference, damping, lower_limits, upper_limits, parents, moves) views of md."""
+    mats, vecs, gamma, parents, moves = md
     return (mats[0], mats[1], vecs[0], mats[2], gamma, vecs[1], vecs[2], vecs[3], vecs[4],
-            vecs[5])
+            vecs[5], parents, moves)
 
 
 @_jit
@@ -189,7 +190,7 @@ def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
 
 
 @_jit
-def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws):
+def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa, ws):
     """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
     value is not finite.  ws: float scratch of rows_scratch_size(n, n_points)."""
     c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _ = \
@@ -207,8 +208,8 @@ def constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa, ws):
     tf = ws[used + 18:used + 21]
     scratch = ws[used + 21:used + 21 + POINT_SCRATCH]
     for k in range(n_points):
-        point_into(t_all, s_all, q_dot, p_link[k], p_r[k], pos[k], vel[k], jac[k], drift[k],
-                   scratch)
+        point_into(t_all, s_all, moves, q_dot, p_link[k], p_r[k], 1.0, pos[k], vel[k], jac[k],
+                   drift[k], scratch)
     for c in range(m):
         kind = c_kind[c]
         if kind == C_JOINT:
@@ -475,8 +476,8 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     """Status of one evaluation at (t s, q (n,), q_dot (n,)); fills q_ddot (n,), lam (m,)
     and info (INFO_SIZE,) = (partition rcond, q_dot.d (W), q_dot.t (W), q_dot.A^T lam (W),
     0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
-    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _ = \
-        model_parts(md)
+    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _, \
+        parents, moves = model_parts(md)
     _, _, _, _, _, _, f_kind, f_off, f_par, d_coord, d_fun = constraint_parts(cd)
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
@@ -486,7 +487,7 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     t_all = ws[:16 * n].reshape((n, 4, 4))
     s_all = ws[16 * n:32 * n].reshape((n, 4, 4))
     used = 32 * n
-    chain_into(origins, generators, is_revolute, q, t_all, s_all,
+    chain_into(origins, generators, is_revolute, parents, q, t_all, s_all,
                ws[used:used + 32].reshape((2, 4, 4)))
     used += 32
     size = terms_scratch_size(n)
@@ -499,7 +500,7 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     rhs = ws[used + 2 * n:used + 3 * n]
     tf = ws[used + 3 * n:used + 3 * n + 3]
     used += 3 * n + 3
-    terms_into(t_all, s_all, pseudo, gamma, q_dot, m_mat, h, g, terms_scratch)
+    terms_into(t_all, s_all, pseudo, gamma, parents, moves, q_dot, m_mat, h, g, terms_scratch)
     w_diss, w_drive = 0.0, 0.0
     for i in range(n):
         d_i = damping[i] * q_dot[i]
@@ -529,7 +530,7 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
         low = reduced_scratch[n:n + n * n].reshape((n, n))
         ok = _cholesky_solve(m_mat, rhs, low, q_ddot)
         return OK if ok else SINGULAR_REDUCED
-    if not constraint_rows(t, q, q_dot, t_all, s_all, cd, phi, phi_dot, a, kappa,
+    if not constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa,
                            rows_scratch):
         return NOT_FINITE
     for i in range(k):

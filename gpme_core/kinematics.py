@@ -1,15 +1,21 @@
 """Forward kinematics in homogeneous transforms and the partial derivatives T_i, T_ij.
 
 For link l (the frame of joint l) the world transform is T^(l)(q) (4, 4).  Because
-joint i moves every link l >= i the same way,
+joint i moves every link l it carries (i = l or an ancestor of l in the kinematic tree,
+``model.moves[i, l]``; in a serial chain every l >= i) the same way,
 
-    T_i^(l)  = dT^(l)/dq_i        = S_i T^(l)            (i <= l, else 0),
-    T_ij^(l) = d2T^(l)/dq_i dq_j  = S_min(i,j) S_max(i,j) T^(l)  (i, j <= l, else 0),
+    T_i^(l)  = dT^(l)/dq_i        = S_i T^(l)            (i moves l, else 0),
+    T_ij^(l) = d2T^(l)/dq_i dq_j  = S_min(i,j) S_max(i,j) T^(l)  (i and j move l, else 0),
 
 with S_i = T^(i) Q_i (T^(i))^-1 (4, 4) the world-frame twist matrix of joint i and Q_i
-its generator (dM_i/dq_i = M_i Q_i).  This is the chain structure that keeps the cost of
-the trace-form terms at O(n^2) instead of O(n^4).  The functions ``transform_derivative``
-and ``transform_second_derivative`` give single T_i^(l), T_ij^(l) for tests and reports.
+its generator (dM_i/dq_i = M_i Q_i).  Two joints that both move l lie on l's path from
+the world, where the lower index is the ancestor.  This is the structure that keeps the
+cost of the trace-form terms at O(n^2) instead of O(n^4).  The functions
+``transform_derivative`` and ``transform_second_derivative`` give single T_i^(l),
+T_ij^(l) for tests and reports.
+
+Tree recursions (p(l) the parent link, -1 the world with V, B = 0 there):
+V_l = V_p(l) + S_l q_dot_l,  B_l = B_p(l) + (2 V_p(l) + S_l q_dot_l) S_l q_dot_l.
 """
 from dataclasses import dataclass
 
@@ -42,10 +48,8 @@ def link_transforms(model, q):
     """(n, 4, 4) world transforms T^(l) of every link l at coordinates q (n,)."""
     local = model.origins @ joint_motions(model, q)
     out = np.empty_like(local)
-    acc = _E4
-    for k in range(model.n_coordinates):
-        acc = acc @ local[k]
-        out[k] = acc
+    for k, parent in enumerate(model.parents):
+        out[k] = local[k] if parent < 0 else out[parent] @ local[k]
     return out
 
 
@@ -66,21 +70,26 @@ def joint_twists(model, transforms):
 
 @dataclass(frozen=True)
 class ChainKinematics:
-    """Link transforms T (n, 4, 4) and joint twist matrices S (n, 4, 4) at one q."""
+    """Link transforms T (n, 4, 4) and joint twist matrices S (n, 4, 4) at one q;
+    moves (n, n) bool is the model's ``moves`` (None: a serial chain)."""
 
     q: np.ndarray
     T: np.ndarray
     S: np.ndarray
+    moves: np.ndarray = None
+
+    def _moves(self, i, link):
+        return i <= link if self.moves is None else bool(self.moves[i, link])
 
     def T_first(self, link, i):
         """T_i^(link) (4, 4)."""
-        if i > link:
+        if not self._moves(i, link):
             return np.zeros((4, 4))
         return self.S[i] @ self.T[link]
 
     def T_second(self, link, i, j):
         """T_ij^(link) (4, 4)."""
-        if max(i, j) > link:
+        if not (self._moves(i, link) and self._moves(j, link)):
             return np.zeros((4, 4))
         a, b = min(i, j), max(i, j)
         return self.S[a] @ self.S[b] @ self.T[link]
@@ -90,7 +99,7 @@ def chain_kinematics(model, q):
     """:class:`ChainKinematics` at coordinates q (n,)."""
     q = np.asarray(q, dtype=float)
     t = link_transforms(model, q)
-    return ChainKinematics(q, t, joint_twists(model, t))
+    return ChainKinematics(q, t, joint_twists(model, t), model.moves)
 
 
 def transform_derivative(model, q, link, i):
@@ -103,22 +112,39 @@ def transform_second_derivative(model, q, link, i, j):
     return chain_kinematics(model, q).T_second(link, i, j)
 
 
-def twist_velocities(S, q_dot):
-    """(n, 4, 4) V_l = sum_{i<=l} S_i q_dot_i: T_dot^(l) = V_l T^(l)."""
-    return np.cumsum(S * np.asarray(q_dot)[:, None, None], axis=0)
+def twist_velocities(S, q_dot, parents=None):
+    """(n, 4, 4) V_l = sum_{i moves l} S_i q_dot_i: T_dot^(l) = V_l T^(l).
+
+    parents : (n,) parent link indices (-1 the world), None for a serial chain."""
+    w = S * np.asarray(q_dot, dtype=float)[:, None, None]
+    if parents is None:
+        return np.cumsum(w, axis=0)
+    out = np.empty_like(w)
+    for l, p in enumerate(parents):
+        out[l] = w[l] if p < 0 else out[p] + w[l]
+    return out
 
 
-def velocity_product_accelerations(S, q_dot):
-    """(n, 4, 4) B_l with sum_{i,j<=l} T_ij^(l) q_dot_i q_dot_j = B_l T^(l).
+def velocity_product_accelerations(S, q_dot, parents=None):
+    """(n, 4, 4) B_l with sum_{i,j move l} T_ij^(l) q_dot_i q_dot_j = B_l T^(l).
 
-    B_l = sum_{i,j<=l} S_min(i,j) S_max(i,j) q_dot_i q_dot_j, by the recursion
-    B_l = B_{l-1} + (2 V_{l-1} + S_l q_dot_l) S_l q_dot_l.
+    B_l = sum_{i,j move l} S_min(i,j) S_max(i,j) q_dot_i q_dot_j, by the recursion
+    B_l = B_p(l) + (2 V_p(l) + S_l q_dot_l) S_l q_dot_l (module docstring; p(l) = l - 1
+    in a serial chain, parents=None).
     """
     q_dot = np.asarray(q_dot, dtype=float)
     w = S * q_dot[:, None, None]                     # S_l q_dot_l
-    v_before = np.cumsum(w, axis=0) - w              # V_{l-1}
-    inc = (2.0 * v_before + w) @ w
-    return np.cumsum(inc, axis=0)
+    if parents is None:
+        v_before = np.cumsum(w, axis=0) - w          # V_{l-1}
+        inc = (2.0 * v_before + w) @ w
+        return np.cumsum(inc, axis=0)
+    v = twist_velocities(S, q_dot, parents)
+    out = np.empty_like(w)
+    for l, p in enumerate(parents):
+        v_before = v[p] if p >= 0 else 0.0 * w[l]
+        inc = (2.0 * v_before + w[l]) @ w[l]
+        out[l] = inc if p < 0 else out[p] + inc
+    return out
 
 
 @dataclass(frozen=True)
@@ -138,14 +164,16 @@ class PointKinematics:
 def point_kinematics(model, kin, q_dot, link, r_local):
     """Kinematics of the point r_local (3,) m (in the frame of ``link``) at kin, q_dot."""
     if fast.ENABLED:
-        pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, np.asarray(q_dot, dtype=float),
-                                        link, np.asarray(r_local, dtype=float))
+        pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, model.moves,
+                                        np.asarray(q_dot, dtype=float), link,
+                                        np.asarray(r_local, dtype=float), 1.0)
         return PointKinematics(pos, vel, jac, drift)
     r = np.append(np.asarray(r_local, dtype=float), 1.0)
     r_world = kin.T[link] @ r
     jac = np.zeros((3, model.n_coordinates))
-    jac[:, :link + 1] = (kin.S[:link + 1] @ r_world)[:, :3].T
-    b = velocity_product_accelerations(kin.S[:link + 1], np.asarray(q_dot)[:link + 1])[-1]
+    path = model.ancestors(link)                     # a serial chain from the world
+    jac[:, path] = (kin.S[path] @ r_world)[:, :3].T
+    b = velocity_product_accelerations(kin.S[path], np.asarray(q_dot)[path])[-1]
     drift = (b @ r_world)[:3]
     return PointKinematics(r_world[:3], jac @ q_dot, jac, drift)
 

@@ -1,15 +1,19 @@
-"""Serial-chain model description: joints, links, frames, springs, dampers, drives.
+"""Kinematic-tree model description: joints, links, frames, springs, dampers, drives.
 
-A model is a serial chain of joints k = 0 .. n-1, each with one coordinate q_k.  The
-frame of joint k after its motion is the frame of link k:
+A model is a kinematic tree of joints k = 0 .. n-1, each with one coordinate q_k and
+one parent link p(k) < k (-1 = the world); a serial chain is the tree with p(k) = k - 1.
+The frame of joint k after its motion is the frame of link k:
 
-    T^(k)(q) = T^(k-1)(q) @ origin_k @ motion_k(q_k),      T^(-1) = identity (world),
+    T^(k)(q) = T^(p(k))(q) @ origin_k @ motion_k(q_k),      T^(-1) = identity (world),
 
 where origin_k (4, 4) is constant (parent link frame -> joint frame at q_k = 0) and
 motion_k is a rotation about (revolute) or a translation along (prismatic) the unit
 ``axis`` of the joint frame.  Link k carries the mass properties attached to it,
 expressed in its own frame (held as the pseudo-inertia H^(k)); links may be massless
-(intermediate frames of an RFEM spring-damping element).
+(intermediate frames of an RFEM spring-damping element).  Joint i moves link l when i is
+l or one of its ancestors (``Model.moves[i, l]``); every sum of the trace-form terms runs
+over these pairs only, so a branch does not move its sibling branches.  Closed loops are
+a tree plus two-frame constraints (gpme_core.pair_constraints).
 
 A model is built once by :class:`ChainBuilder`, validated once (every problem in one
 :class:`ModelError`), and immutable.  The state (t, q, q_dot) is passed in and out as
@@ -31,6 +35,9 @@ from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE  # noqa: F401 (users i
 from .rfem import discretise_beam
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+# Joint.parent naming the world as a joint's parent (the root of a branch); no link may
+# be called so
+WORLD = "world"
 # |axis| - 1 accepted for a joint axis (a unit vector written in 9 significant digits)
 AXIS_UNIT_TOL = 1e-9
 # Shortest joint axis a reader normalises (gpme_io.urdf_reader): an axis this short is a
@@ -78,6 +85,9 @@ class Joint:
     limits          : (lower, upper) range of q in rad or m (the stroke of a slider, the
                       travel of a hinge); a programmed motion that needs q outside it
                       cannot be met and stops with a ConstraintError
+    parent          : name of the link the joint is mounted on (``origin`` is given in its
+                      frame), WORLD for the world, or None for the link of the joint
+                      listed just before it (the world for the first: a serial chain)
     """
 
     name: str
@@ -89,6 +99,7 @@ class Joint:
     damping: float = 0.0
     link: str = ""
     limits: tuple = (-np.inf, np.inf)
+    parent: Optional[str] = None
 
     def __post_init__(self):
         # a read-only copy: the caller's array can change afterwards without moving the joint
@@ -136,7 +147,9 @@ class Model:
     Array attributes (n coordinates): origins (n, 4, 4); axes (n, 3); is_revolute (n,)
     bool; generators (n, 4, 4); pseudo_inertias (n, 4, 4) kg, kg m, kg m^2 in each link
     frame; gravity (3,) m/s^2 and gamma (4,) = (gravity, 0); stiffness, spring_reference,
-    damping, lower_limits, upper_limits (n,) in the coordinates' SI units.
+    damping, lower_limits, upper_limits (n,) in the coordinates' SI units; parents (n,)
+    int, the index of each joint's parent link (-1 the world, always < the joint's own);
+    moves (n, n) bool, moves[i, l] when joint i moves link l (i is l or an ancestor of it).
     """
 
     def __init__(self, joints, links, frames, drives, gravity, flexible_links, name,
@@ -173,6 +186,10 @@ class Model:
         put("damping", frozen_array([j.damping for j in self.joints]))
         put("lower_limits", frozen_array([j.limits[0] for j in self.joints]))
         put("upper_limits", frozen_array([j.limits[1] for j in self.joints]))
+        parents, parent_problems = _parent_indices(self.joints, self.links)
+        put("parents", frozen_array(parents, dtype=np.int64))
+        put("_parent_problems", tuple(parent_problems))
+        put("moves", frozen_array(_moves(parents), dtype=bool))
         put("_drive_indices", frozen_array([self._index.get(d.joint, -1) for d in self.drives],
                                            dtype=int))
         put("_frozen", True)
@@ -193,6 +210,16 @@ class Model:
                         tuple(self.gravity), self.flexible_links, self.name, self.geometry))
 
     # ------------------------------------------------------------------ lookup
+    @property
+    def is_chain(self):
+        """True when every joint is mounted on the link before it (a serial chain)."""
+        return bool(np.array_equal(self.parents, np.arange(self.n_coordinates) - 1))
+
+    def ancestors(self, link):
+        """Indices of the joints that move link ``link`` (its path from the world), in
+        increasing order, ``link`` itself last."""
+        return np.flatnonzero(self.moves[:, link])
+
     def index(self, name):
         """Index of the coordinate called ``name``."""
         try:
@@ -270,6 +297,40 @@ class Model:
                 f"{len(self.frames)} frames, mass {self.total_mass:.6g} kg)")
 
 
+def _parent_indices(joints, links):
+    """((n,) parent link index per joint, -1 the world; [problems]) from Joint.parent: a
+    named parent must be a link listed before the joint (parents first, so that one pass
+    in index order meets every parent before its children)."""
+    index = {lk.name: k for k, lk in enumerate(links)}
+    parents, problems = [], []
+    for k, j in enumerate(joints):
+        if j.parent is None:
+            parents.append(k - 1)
+        elif j.parent == WORLD:
+            parents.append(-1)
+        elif index.get(j.parent, k) < k:
+            parents.append(index[j.parent])
+        else:
+            where = ("is listed after it" if j.parent in index else
+                     "is not a link of the model")
+            problems.append(f"joint {j.name!r}: parent link {j.parent!r} {where}; a joint's "
+                            f"parent must be {WORLD!r} or a link listed before the joint "
+                            f"(links before it: {[lk.name for lk in links[:k]]})")
+            parents.append(-1)
+    return parents, problems
+
+
+def _moves(parents):
+    """(n, n) bool, [i, l] when joint i is link l or one of its ancestors."""
+    n = len(parents)
+    out = np.zeros((n, n), dtype=bool)
+    for l in range(n):
+        out[l, l] = True
+        if parents[l] >= 0:
+            out[:, l] |= out[:, parents[l]]
+    return out
+
+
 def _rigid_transform_problems(label, t):
     t = np.asarray(t, dtype=float)
     if t.shape != (4, 4):
@@ -290,6 +351,7 @@ def validate_model(model):
     problems = []
     if model.n_coordinates == 0:
         problems.append("the model has no joints; add at least one")
+    problems += model._parent_problems
     seen = set()
     for j in model.joints:
         lbl = f"joint {j.name!r}"
@@ -316,6 +378,9 @@ def validate_model(model):
     for lk in model.links:
         if lk.name in link_names:
             problems.append(f"link {lk.name!r}: duplicate link name")
+        if lk.name == WORLD:
+            problems.append(f"link {WORLD!r}: the name is reserved for the world (the parent "
+                            "of a branch's first joint); rename the link")
         link_names.add(lk.name)
         if lk.inertia is not None:
             problems += lk.inertia.problems(f"link {lk.name!r}")
@@ -370,10 +435,12 @@ def _mass_matrix_problems(model):
 
 
 class ChainBuilder:
-    """Assemble a serial chain joint by joint, then :meth:`build` an immutable Model.
+    """Assemble a serial chain or a tree joint by joint, then :meth:`build` an immutable
+    Model.
 
-    Each :meth:`add_joint` creates a new link (the joint's moving frame); the bodies,
-    beams and frames added afterwards attach to the newest link until the next joint.
+    Each :meth:`add_joint` creates a new link (the joint's moving frame), mounted on the
+    newest link unless ``parent`` names another (a branch); the bodies, beams and frames
+    added afterwards attach to the newest link until the next joint.
     """
 
     def __init__(self, name="model", gravity=STANDARD_GRAVITY):
@@ -394,16 +461,22 @@ class ChainBuilder:
         return len(self._joints)
 
     def add_joint(self, name, kind, axis, origin=None, stiffness=0.0, spring_reference=0.0,
-                  damping=0.0, link=None, limits=(-np.inf, np.inf)):
-        """Add a joint (and its link); origin is relative to the current link frame."""
+                  damping=0.0, link=None, limits=(-np.inf, np.inf), parent=None):
+        """Add a joint (and its link).
+
+        parent : None to mount it on the current (newest) link, as in a serial chain; or
+                 the name of an earlier link, or WORLD, to start a branch there.
+        origin : (4, 4) joint frame at q = 0 in the parent link frame (after a pending
+                 beam-tip offset when mounted on the current link)."""
         origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
-        if origin.shape == (4, 4):
+        on_current = parent is None or (self._link_names and parent == self._link_names[-1])
+        if origin.shape == (4, 4) and on_current:
             origin = self._pending_origin @ origin
         self._pending_origin = np.eye(4)
         axis = tuple(float(a) for a in np.ravel(axis))
         self._joints.append(Joint(name, kind, axis, origin, float(stiffness),
                                   float(spring_reference), float(damping), link or name,
-                                  tuple(float(v) for v in limits)))
+                                  tuple(float(v) for v in limits), parent))
         self._link_names.append(link or name)
         self._link_h.append(None)
         self._link_parts.append([])

@@ -182,13 +182,13 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
     ET.SubElement(mj, "compiler", discardvisual="false", fusestatic="false",
                   boundmass=_num(MUJOCO_BOUND), boundinertia=_num(MUJOCO_BOUND))
     ET.SubElement(robot, "link", name=ROOT_LINK)
-    parent = ROOT_LINK
     by_link = {}
     for shape in model.geometry:
         by_link.setdefault(shape.link_index, []).append(shape)
     for k, (joint, link) in enumerate(zip(model.joints, model.links)):
         j = ET.SubElement(robot, "joint", name=joint.name, type=_URDF_KIND[joint.kind])
-        ET.SubElement(j, "parent", link=parent)
+        parent = int(model.parents[k])
+        ET.SubElement(j, "parent", link=ROOT_LINK if parent < 0 else model.links[parent].name)
         ET.SubElement(j, "child", link=link.name)
         _origin(j, joint.origin)
         ET.SubElement(j, "axis", xyz=_vec(joint.axis))
@@ -199,7 +199,6 @@ def urdf_documents(model: Model, include_drives: bool = True, urdf_name=None) ->
         link_el = ET.SubElement(robot, "link", name=link.name)
         _inertial(link_el, link.inertia)
         _shapes(link_el, by_link.get(k, []))
-        parent = link.name
     for name in _written_frames(model):
         fr = model.frames[name]
         j = ET.SubElement(robot, "joint", name=name + FIXED_SUFFIX, type="fixed")

@@ -21,8 +21,8 @@ def _grad(f, x, h=H):
     return out
 
 
-def test_mass_matrix_equals_trace_double_sum(arm, crane, rng):
-    for model in (arm, crane):
+def test_mass_matrix_equals_trace_double_sum(arm, crane, tree, rng):
+    for model in (arm, crane, tree):
         n = model.n_coordinates
         q = rng.uniform(-1, 1, n)
         kin = chain_kinematics(model, q)
@@ -35,25 +35,25 @@ def test_mass_matrix_equals_trace_double_sum(arm, crane, rng):
         np.testing.assert_allclose(dy.mass_matrix(model, q), m, rtol=1e-13, atol=1e-13)
 
 
-def test_mass_matrix_symmetric_positive_definite(arm, crane, rng):
-    for model in (arm, crane):
+def test_mass_matrix_symmetric_positive_definite(arm, crane, tree, rng):
+    for model in (arm, crane, tree):
         for _ in range(5):
             m = dy.mass_matrix(model, rng.uniform(-2, 2, model.n_coordinates))
             np.testing.assert_array_equal(m, m.T)
             assert np.linalg.eigvalsh(m).min() > 0
 
 
-def test_kinetic_energy_trace_form_equals_quadratic_form(arm, crane, rng):
-    for model in (arm, crane):
+def test_kinetic_energy_trace_form_equals_quadratic_form(arm, crane, tree, rng):
+    for model in (arm, crane, tree):
         n = model.n_coordinates
         q, qd = rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)
         e = dy.kinetic_energy(model, q, qd)
         assert abs(e - 0.5 * qd @ dy.mass_matrix(model, q) @ qd) < 1e-13 * max(e, 1)
 
 
-def test_velocity_products_match_lagrange_equations(arm, crane, rng):
+def test_velocity_products_match_lagrange_equations(arm, crane, tree, rng):
     """c = d/dt(dT/dq_dot)|_{q_ddot=0} - dT/dq = (dM/dt) q_dot - dT/dq, and h = -c."""
-    for model in (arm, crane):
+    for model in (arm, crane, tree):
         n = model.n_coordinates
         q, qd = rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)
         dt_dq = _grad(lambda x: dy.kinetic_energy(model, x, qd), q)
@@ -63,8 +63,8 @@ def test_velocity_products_match_lagrange_equations(arm, crane, rng):
         np.testing.assert_allclose(-h, c, atol=1e-7 * max(1, np.abs(c).max()))
 
 
-def test_gravity_is_gradient_of_potential(arm, crane, rng):
-    for model in (arm, crane):
+def test_gravity_is_gradient_of_potential(arm, crane, tree, rng):
+    for model in (arm, crane, tree):
         q = rng.uniform(-1, 1, model.n_coordinates)
         g_fd = _grad(lambda x: dy.gravity_potential_energy(model, x), q)
         np.testing.assert_allclose(dy.gravity_forces(model, q), g_fd, atol=1e-7)

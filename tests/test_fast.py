@@ -11,15 +11,17 @@ pytestmark = pytest.mark.skipif(not fast.ENABLED, reason="GPME_NO_JIT=1: numpy p
 
 
 @pytest.mark.parametrize("n_rfe", [0, 3, 10])
-def test_kernels_equal_reference_to_round_off(n_rfe, arm, rng):
-    for model in (build_crane(n_rfe), arm):
+def test_kernels_equal_reference_to_round_off(n_rfe, arm, tree, rng):
+    for model in (build_crane(n_rfe), arm, tree):
         n = model.n_coordinates
         q, qd = rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
-        t_all, s_all = fast.chain(model.origins, model.generators, model.is_revolute, q)
+        t_all, s_all = fast.chain(model.origins, model.generators, model.is_revolute,
+                                  model.parents, q)
         kin = chain_kinematics(model, q)
         np.testing.assert_allclose(t_all, kin.T, rtol=0, atol=1e-14)
         np.testing.assert_allclose(s_all, kin.S, rtol=0, atol=1e-14)
-        m, h, g = fast.terms(t_all, s_all, model.pseudo_inertias, np.append(model.gravity, 0), qd)
+        m, h, g = fast.terms(t_all, s_all, model.pseudo_inertias, np.append(model.gravity, 0),
+                             model.parents, model.moves, qd)
         # round-off of sums over n links of 4x4 products: ~n * eps * scale
         for fast_val, ref in ((m, dy.mass_matrix(model, q)),
                               (h, dy.velocity_product_terms(model, q, qd)),
@@ -37,11 +39,11 @@ def _with_path(monkeypatch, enabled, compute):
 
 
 @pytest.mark.parametrize("n_rfe", [0, 3])
-def test_point_kinematics_compiled_equals_numpy(n_rfe, arm, rng, monkeypatch):
+def test_point_kinematics_compiled_equals_numpy(n_rfe, arm, tree, rng, monkeypatch):
     """fast.point against the numpy route of kinematics.point_kinematics (position, velocity,
     Jacobian C, drift d of a point off the link origin) at random states, on every link."""
     from gpme_core.kinematics import point_kinematics
-    for model in (build_crane(n_rfe), arm):
+    for model in (build_crane(n_rfe), arm, tree):
         n = model.n_coordinates
         q, qd = rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
         kin = chain_kinematics(model, q)

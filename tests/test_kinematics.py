@@ -13,12 +13,12 @@ FD_STEP = 1e-5
 FD_TOL = 1e-7
 
 
-def models(arm, crane):
-    return [arm, crane]
+def models(arm, crane, tree):
+    return [arm, crane, tree]
 
 
-def test_first_derivatives_match_finite_differences(arm, crane, rng):
-    for model in models(arm, crane):
+def test_first_derivatives_match_finite_differences(arm, crane, tree, rng):
+    for model in models(arm, crane, tree):
         n = model.n_coordinates
         q = rng.uniform(-1, 1, n)
         kin = chain_kinematics(model, q)
@@ -30,8 +30,8 @@ def test_first_derivatives_match_finite_differences(arm, crane, rng):
                 np.testing.assert_allclose(kin.T_first(l, i), fd[l], atol=FD_TOL, rtol=0)
 
 
-def test_second_derivatives_match_finite_differences(arm, crane, rng):
-    for model in models(arm, crane):
+def test_second_derivatives_match_finite_differences(arm, crane, tree, rng):
+    for model in models(arm, crane, tree):
         n = model.n_coordinates
         q = rng.uniform(-1, 1, n)
         for i in range(n):
@@ -46,30 +46,38 @@ def test_second_derivatives_match_finite_differences(arm, crane, rng):
                                                err_msg=f"T_{i}{j}^({l})")
 
 
-def test_velocity_product_recursion_equals_double_sum(arm, rng):
-    n = arm.n_coordinates
-    q, qd = rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)
-    kin = chain_kinematics(arm, q)
-    b = velocity_product_accelerations(kin.S, qd)
-    for l in range(n):
-        direct = sum(kin.T_second(l, i, j) * qd[i] * qd[j] for i in range(n) for j in range(n))
-        np.testing.assert_allclose(b[l] @ kin.T[l], direct, atol=1e-12)
+def test_velocity_product_recursion_equals_double_sum(arm, tree, rng):
+    for model in (arm, tree):
+        n = model.n_coordinates
+        q, qd = rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)
+        kin = chain_kinematics(model, q)
+        b = velocity_product_accelerations(kin.S, qd, model.parents)
+        for l in range(n):
+            direct = sum(kin.T_second(l, i, j) * qd[i] * qd[j]
+                         for i in range(n) for j in range(n))
+            np.testing.assert_allclose(b[l] @ kin.T[l], direct, atol=1e-12)
 
 
-def test_point_jacobian_and_drift_match_finite_differences_in_time(arm, rng):
-    n = arm.n_coordinates
+@pytest.mark.parametrize("which, frame", [("arm", "E"), ("tree", "E"), ("tree", "F")])
+def test_point_jacobian_and_drift_match_finite_differences_in_time(which, frame, arm, tree,
+                                                                     rng):
+    model = {"arm": arm, "tree": tree}[which]
+    n = model.n_coordinates
     q, qd, qdd = rng.uniform(-1, 1, n), rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)
-    fr = arm.frame("E")
+    fr = model.frame(frame)
     r = fr.transform[:3, 3]
 
     def position(t):
         qt = q + qd * t + 0.5 * qdd * t * t
-        return link_transforms(arm, qt)[fr.link_index] @ np.append(r, 1.0)
+        return link_transforms(model, qt)[fr.link_index] @ np.append(r, 1.0)
 
-    pk = point_kinematics(arm, chain_kinematics(arm, q), qd, fr.link_index, r)
+    pk = point_kinematics(model, chain_kinematics(model, q), qd, fr.link_index, r)
     h = 1e-4
     vel = (position(h) - position(-h))[:3] / (2 * h)
     acc = (position(h) - 2 * position(0.0) + position(-h))[:3] / h ** 2
     np.testing.assert_allclose(pk.velocity, vel, atol=1e-7)
     # second difference: truncation ~ h^2 |p''''| / 12 ~ 1e-8, round-off ~ eps/h^2 ~ 2e-8
     np.testing.assert_allclose(pk.jacobian @ qdd + pk.drift, acc, atol=1e-6)
+    # a joint off the point's path does not move it
+    off_path = ~model.moves[:, fr.link_index]
+    assert not pk.jacobian[:, off_path].any()

@@ -121,15 +121,15 @@ def from_gpme(model) -> PinocchioSystem:
     pm = pin.Model()
     pm.name = model.name
     link_frames = []
-    frame_id = 0                                    # the universe frame
     for k, (joint, link) in enumerate(zip(model.joints, model.links)):
-        jid = pm.addJoint(k, _joint_model(joint.kind, joint.axis), pin.SE3(joint.origin),
-                          joint.name)
+        parent = int(model.parents[k])             # -1 the world: Pinocchio's joint 0
+        jid = pm.addJoint(parent + 1, _joint_model(joint.kind, joint.axis),
+                          pin.SE3(joint.origin), joint.name)
         inertia = pin.Inertia.Zero() if link.inertia is None else pin.Inertia(
             link.inertia.mass, link.inertia.com_array, link.inertia.inertia_array)
         pm.appendBodyToJoint(jid, inertia, pin.SE3.Identity())
-        frame_id = pm.addBodyFrame(link.name, jid, pin.SE3.Identity(), frame_id)
-        link_frames.append(frame_id)
+        parent_frame = 0 if parent < 0 else link_frames[parent]    # 0: the universe frame
+        link_frames.append(pm.addBodyFrame(link.name, jid, pin.SE3.Identity(), parent_frame))
     pm.damping = model.damping.copy()
     frames = {}
     for name, fr in model.frames.items():
@@ -155,7 +155,7 @@ def from_urdf(urdf_path, coordinate_names, link_names, frame_names,
     side = load_side_file(side_path) if side_path is not None else {}
     problems = []
     names = list(pm.names)[1:]
-    if pm.nq != pm.nv or names != list(coordinate_names):
+    if pm.nq != pm.nv or sorted(names) != sorted(coordinate_names):
         problems.append(f"Pinocchio read joints {names} (nq={pm.nq}, nv={pm.nv}) from "
                         f"{urdf_path}, expected {list(coordinate_names)} with nq = nv")
     missing = [f for f in list(link_names) + list(frame_names) if not pm.existFrame(f)]
@@ -169,9 +169,15 @@ def from_urdf(urdf_path, coordinate_names, link_names, frame_names,
                           for n in coordinate_names])
     pm.gravity = pin.Motion(np.array(side.get("gravity", (0.0, 0.0, -9.81)), dtype=float),
                             np.zeros(3))
+    # by name: Pinocchio's parser numbers the joints of a tree depth first, which need not
+    # be the gpme order (parents first, branches in the order the model lists them)
+    ids = [pm.getJointId(name) for name in coordinate_names]
+    q_index = np.array([pm.joints[j].idx_q for j in ids], dtype=int)
+    v_index = np.array([pm.joints[j].idx_v for j in ids], dtype=int)
     return PinocchioSystem(pm, tuple(_frame_id(pm, n) for n in link_names),
                            {f: _frame_id(pm, f) for f in frame_names}, stiffness, reference,
-                           np.array(pm.damping), "urdf", *_identity_map(len(coordinate_names)),
+                           np.array(pm.damping)[v_index], "urdf", q_index, v_index,
+                           np.zeros(len(ids), dtype=bool),
                            notes=(f"Pinocchio's URDF parser on {Path(urdf_path).name}; springs "
                                   "and gravity from its side file",))
 
