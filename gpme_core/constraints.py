@@ -21,6 +21,7 @@ import sympy as sp
 from . import expression_checks as checks
 from .errors import ConstraintError, ModelError
 from .kinematics import point_kinematics
+from .pair_constraints import vectors_of
 from .time_functions import TimeFunction
 
 
@@ -276,17 +277,24 @@ def bind_constraints(model, constraints):
 
 
 def evaluate_constraints(model, bound, t, kin, q_dot):
-    """(Phi (m,), Phi_dot (m,), A (m, n), kappa (m,)) for all bound constraints."""
+    """(Phi (m,), Phi_dot (m,), A (m, n), kappa (m,)) for all bound constraints (point
+    constraints, joint programmes and gpme_core.pair_constraints)."""
     m = len(bound)
     phi, phi_dot, kappa = np.empty(m), np.empty(m), np.empty(m)
     a = np.empty((m, model.n_coordinates))
     cache = {}
     for k, c in enumerate(bound):
         point = None
+        keys = getattr(c, "vector_keys", None)
+        if keys is not None:           # a pair constraint: both frames' vectors
+            phi[k], a[k], phi_dot[k], kappa[k] = c.evaluate(
+                t, kin, q_dot, vectors_of(model, kin, q_dot, keys, cache))
+            continue
         if c.point_key is not None:
-            point = cache.get(c.point_key)
+            key = (c.link, tuple(c.r_local), 1.0)
+            point = cache.get(key)
             if point is None:
                 point = point_kinematics(model, kin, q_dot, c.link, c.r_local)
-                cache[c.point_key] = point
+                cache[key] = point
         phi[k], a[k], phi_dot[k], kappa[k] = c.evaluate(t, kin, q_dot, point)
     return phi, phi_dot, a, kappa

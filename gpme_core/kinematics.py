@@ -163,12 +163,20 @@ class PointKinematics:
 
 def point_kinematics(model, kin, q_dot, link, r_local):
     """Kinematics of the point r_local (3,) m (in the frame of ``link``) at kin, q_dot."""
+    return vector_kinematics(model, kin, q_dot, link, r_local, 1.0)
+
+
+def vector_kinematics(model, kin, q_dot, link, r_local, w):
+    """:class:`PointKinematics` of the homogeneous vector (r_local, w) fixed on ``link``:
+    w = 1, a point (r_local in m, as :func:`point_kinematics`); w = 0, a direction
+    (r_local a vector of the link frame, turned with the link and not translated: its
+    'position' is the world vector, its Jacobian columns S_i (u, 0) = omega_i x u)."""
     if fast.ENABLED:
         pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, model.moves,
                                         np.asarray(q_dot, dtype=float), link,
-                                        np.asarray(r_local, dtype=float), 1.0)
+                                        np.asarray(r_local, dtype=float), float(w))
         return PointKinematics(pos, vel, jac, drift)
-    r = np.append(np.asarray(r_local, dtype=float), 1.0)
+    r = np.append(np.asarray(r_local, dtype=float), float(w))
     r_world = kin.T[link] @ r
     jac = np.zeros((3, model.n_coordinates))
     path = model.ancestors(link)                     # a serial chain from the world
