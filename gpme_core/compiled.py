@@ -3,9 +3,11 @@
 :func:`for_system` gives a :class:`CompiledSystem` (or None with the reason when the system
 cannot be compiled).  What compiles:
 
-* constraints: EllipseConstraint, CoordinateProgramme, JointProgramme and
-  SympyPointConstraint (its phi and derivatives generated as straight-line code after
-  SymPy's common-subexpression elimination, compiled by numba once);
+* constraints: EllipseConstraint, CoordinateProgramme, JointProgramme,
+  SympyPointConstraint and the pair constraints RelativeCoordinate, Distance,
+  AxisAlignment and SympyPairConstraint (the SymPy ones' phi and derivatives generated as
+  straight-line code after SymPy's common-subexpression elimination, compiled by numba
+  once);
 * time functions of programmes and drives: Constant, Cosine, Sine, QuinticRamp,
   Tabulated and SympyTimeFunction (generated the same way).
 
@@ -28,6 +30,7 @@ import os
 import sys
 import tempfile
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import sympy as sp
@@ -38,6 +41,8 @@ from .constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme
                           SympyPointConstraint)
 from .errors import OutputWriteError
 from .gpme import SINGULAR_RCOND
+from .pair_constraints import (PAIR_SYMBOL_NAMES, AxisAlignment, Distance,
+                               RelativeCoordinate, SympyPairConstraint)
 from .time_functions import (Constant, Cosine, QuinticRamp, Sine, SympyTimeFunction,
                              Tabulated)
 
@@ -58,7 +63,7 @@ class _Tables:
 
     def __init__(self):
         self.f_kind, self.f_off, self.f_par = [], [], []
-        self.user_times, self.user_points = [], []
+        self.user_times, self.user_points, self.user_pairs = [], [], []
         self.points = {}
 
     def time_function(self, fn, label):
@@ -87,24 +92,49 @@ class _Tables:
         self.f_par.append([float(v) for v in entry[1]])
         return len(self.f_kind) - 1
 
-    def point(self, link, r_local):
-        key = (int(link), tuple(float(v) for v in r_local))
+    def point(self, link, r_local, w=1.0):
+        """Index of the vector (r_local (3,), homogeneous w: 1 a point, 0 a direction)
+        fixed on ``link`` in the table of vectors whose kinematics the kernels compute."""
+        key = (int(link), tuple(float(v) for v in r_local), float(w))
         return self.points.setdefault(key, len(self.points))
 
 
+class UserCode(NamedTuple):
+    """The SymPy parts of a system that become generated code: point constraints, pair
+    constraints and time functions, each numbered in the order of this tuple."""
+
+    points: tuple = ()
+    pairs: tuple = ()
+    times: tuple = ()
+
+
 def pack(system):
-    """(md, cd, user_points, user_times) of ``system`` for gpme_core.kernels (layout in its
-    docstring); NotCompilable names the first part that cannot be compiled."""
+    """(md, cd, UserCode) of ``system`` for gpme_core.kernels (layout in its docstring);
+    NotCompilable names the first part that cannot be compiled."""
     model = system.model
     tables = _Tables()
     m = system.n_constraints
     c_kind = np.zeros(m, dtype=np.int64)
     c_point = np.zeros(m, dtype=np.int64)
     c_fun = np.full(m, -1, dtype=np.int64)
+    c_point_b = np.full(m, -1, dtype=np.int64)
     c_par = np.zeros((m, 4))
     for c, (spec, bound) in enumerate(zip(system.constraint_specs, system.bound)):
         kind = type(spec)
         label = f"constraint {spec.name!r}"
+        if kind in _PAIR_KINDS:
+            c_kind[c] = _PAIR_KINDS[kind]
+            if kind is SympyPairConstraint:
+                tables.user_pairs.append(spec)
+                c_par[c, 0] = len(tables.user_pairs) - 1
+            else:
+                c_fun[c] = tables.time_function(spec.function, f"the programme of {label}")
+                if kind is RelativeCoordinate:
+                    c_par[c, 0] = spec.axis
+            (link_a, vec_a, w_a), (link_b, vec_b, w_b) = bound.ends
+            c_point[c] = tables.point(link_a, vec_a, w_a)
+            c_point_b[c] = tables.point(link_b, vec_b, w_b)
+            continue
         if kind is JointProgramme:
             c_kind[c] = kernels.C_JOINT
             c_par[c, 0] = bound.k
@@ -124,17 +154,19 @@ def pack(system):
         else:
             raise NotCompilable(f"{label} is a {kind.__name__}, which the compiled kernels do "
                                 "not know (they know EllipseConstraint, CoordinateProgramme, "
-                                "JointProgramme and SympyPointConstraint)")
+                                "JointProgramme, SympyPointConstraint, RelativeCoordinate, "
+                                "Distance, AxisAlignment and SympyPairConstraint)")
         c_point[c] = tables.point(bound.link, bound.r_local)
     d_coord, d_fun = [], []
     for d in model.drives:
         d_coord.append(model.index(d.joint))
         d_fun.append(tables.time_function(d.function, f"the drive on {d.joint!r}"))
     p_link = [k[0] for k in tables.points]
-    p_r = [v for k in tables.points for v in k[1]]
+    p_r = [v for k in tables.points for v in (*k[1], k[2])]
     f_par = [v for p in tables.f_par for v in p]
     ints = ([m, len(p_link), len(tables.f_kind), len(d_coord)] + c_kind.tolist()
-            + c_point.tolist() + c_fun.tolist() + p_link + tables.f_kind + tables.f_off
+            + c_point.tolist() + c_fun.tolist() + c_point_b.tolist() + p_link
+            + tables.f_kind + tables.f_off
             + d_coord + d_fun)
     cd = (np.array(ints, dtype=np.int64),
           np.concatenate([c_par.ravel(), np.array(p_r, dtype=float),
@@ -148,7 +180,12 @@ def pack(system):
     md = (mats, vecs, np.ascontiguousarray(model.gamma, dtype=float),
           np.ascontiguousarray(model.parents, dtype=np.int64),
           np.ascontiguousarray(model.moves, dtype=np.bool_))
-    return md, cd, tables.user_points, tables.user_times
+    return md, cd, UserCode(tuple(tables.user_points), tuple(tables.user_pairs),
+                            tuple(tables.user_times))
+
+
+_PAIR_KINDS = {RelativeCoordinate: kernels.C_RELATIVE, Distance: kernels.C_DISTANCE,
+               AxisAlignment: kernels.C_AXIS_DOT, SympyPairConstraint: kernels.C_USER_PAIR}
 
 
 # ---------------------------------------------------------------- code generation
@@ -181,11 +218,11 @@ def _dispatch(name, args, impls, n_out):
     return "\n".join(lines)
 
 
-def user_source(user_points, user_times):
+def user_source(user):
     """Python source of the user-function section for these SymPy constraints and time
-    functions (gpme_core.kernels' stubs replaced)."""
-    parts, point_impls, time_impls = [], [], []
-    for k, spec in enumerate(user_points):
+    functions (a UserCode; gpme_core.kernels' stubs replaced)."""
+    parts, point_impls, pair_impls, time_impls = [], [], [], []
+    for k, spec in enumerate(user.points):
         x, y, z, t = _named_symbols(spec.expr, ("x", "y", "z", "t"))
         phi = spec.expr
         grad = [sp.diff(phi, v) for v in (x, y, z)]
@@ -196,13 +233,27 @@ def user_source(user_points, user_times):
         fname = f"_user_point_{k}"
         parts.append(_straight_line(fname, (x, y, z, t), exprs, 18))
         point_impls.append(fname)
-    for k, fn in enumerate(user_times):
+    for k, spec in enumerate(user.pairs):
+        syms = _named_symbols(spec.expr, PAIR_SYMBOL_NAMES)
+        s, t = syms[:6], syms[6]
+        phi = spec.expr
+        grad = [sp.diff(phi, v) for v in s]
+        hess = [sp.diff(g, v) for g in grad for v in s]
+        phi_t = sp.diff(phi, t)
+        grad_t = [sp.diff(phi_t, v) for v in s]
+        exprs = [phi, *grad, *hess, phi_t, *grad_t, sp.diff(phi_t, t)]
+        fname = f"_user_pair_{k}"
+        parts.append(_straight_line(fname, syms, exprs, kernels.N_PAIR_TERMS))
+        pair_impls.append(fname)
+    for k, fn in enumerate(user.times):
         t = fn.t_symbol
         exprs = [fn.expr, sp.diff(fn.expr, t), sp.diff(fn.expr, t, 2)]
         fname = f"_user_time_{k}"
         parts.append(_straight_line(fname, (t,), exprs, 3))
         time_impls.append(fname)
     parts.append(_dispatch("user_point_terms", ("x", "y", "z", "t"), point_impls, 18))
+    parts.append(_dispatch("user_pair_terms", PAIR_SYMBOL_NAMES, pair_impls,
+                           kernels.N_PAIR_TERMS))
     parts.append(_dispatch("user_time_terms", ("t",), time_impls, 3))
     return "\n\n\n".join(parts) + "\n"
 
@@ -242,15 +293,16 @@ def _write_cached_module(path, source):
         raise OutputWriteError(path, exc) from None
 
 
-def generated_kernels(user_points, user_times):
-    """gpme_core.kernels itself without SymPy parts, else the generated module for them."""
-    if not user_points and not user_times:
+def generated_kernels(user):
+    """gpme_core.kernels itself without SymPy parts (a UserCode), else the generated
+    module for them."""
+    if not (user.points or user.pairs or user.times):
         return kernels
     template = Path(kernels.__file__).read_text(encoding="utf-8")
     head, rest = template.split(_BEGIN, 1)
     _, tail = rest.split(_END, 1)
     source = (head.replace("from .fast import (", "from gpme_core.fast import (_jit_user, ")
-              + _BEGIN + "\n\n\n" + user_source(user_points, user_times) + "\n" + _END + tail)
+              + _BEGIN + "\n\n\n" + user_source(user) + "\n" + _END + tail)
     digest = hashlib.sha256(source.encode("utf-8")).hexdigest()[:20]
     if digest in _MODULES:
         return _MODULES[digest]
@@ -275,8 +327,8 @@ class CompiledSystem:
 
     def __init__(self, system):
         self.system = system
-        self.md, self.cd, user_points, user_times = pack(system)
-        self.module = generated_kernels(user_points, user_times)
+        self.md, self.cd, user = pack(system)
+        self.module = generated_kernels(user)
         self.n = system.model.n_coordinates
         self.m = system.n_constraints
         self.paper_eq7 = 1.0 if system.damping_form == "paper-eq7" else 0.0

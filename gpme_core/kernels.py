@@ -24,9 +24,11 @@ gpme_core.compiled.pack):
           is_revolute (0/1), stiffness, spring_reference, damping, lower_limits,
           upper_limits; gamma (4,); parents (n,) int64; moves (n, n) bool: the tree,
           gpme_core.fast)                                -> :func:`model_parts`
-    cd = (ci int64: m, P, F, D, c_kind (m), c_point (m), c_fun (m), p_link (P), f_kind (F),
-          f_off (F), d_coord (D), d_fun (D); cf float: c_par (m, 4), p_r (P, 3) m, f_par)
-                                                         -> :func:`constraint_parts`
+    cd = (ci int64: m, P, F, D, c_kind (m), c_point (m), c_fun (m), c_point_b (m),
+          p_link (P), f_kind (F), f_off (F), d_coord (D), d_fun (D); cf float: c_par
+          (m, 4), p_r (P, 4) (vector in the link frame, m or 1, and its homogeneous w: 1 a
+          point, 0 a direction), f_par)                  -> :func:`constraint_parts`
+         (c_point_b: the second vector of a pair constraint, -1 for the others)
     opts = float array (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
            divergence_limit)
 
@@ -61,6 +63,12 @@ C_ELLIPSE = 0               # c_par = (1/a^2, 1/b^2, x_c, y_c)
 C_COORDINATE = 1            # c_par = (axis, ., ., .), phi = p[axis] - f(t)
 C_JOINT = 2                 # c_par = (k, ., ., .), phi = q_k - f(t)
 C_USER_POINT = 3            # c_par = (user index, ., ., .), generated local terms
+# pair constraints (gpme_core.pair_constraints): phi of the stacked vectors s = (s_a, s_b)
+C_RELATIVE = 4              # c_par = (axis, ., ., .), phi = s_b[axis] - s_a[axis] - f(t)
+C_DISTANCE = 5              # phi = |s_b - s_a| - f(t)
+C_AXIS_DOT = 6              # phi = s_a . s_b - f(t) (two directions)
+C_USER_PAIR = 7             # c_par = (user index, ., ., .), generated local terms
+N_PAIR_TERMS = 51           # phi, grad (6), Hessian (6x6), phi_t, grad_t (6), phi_tt
 F_CONSTANT = 0              # (level)
 F_COSINE = 1                # (offset, amplitude, omega)
 F_SINE = 2                  # (offset, amplitude, omega, phase)
@@ -84,6 +92,14 @@ def user_point_terms(index, x, y, z, t, out):
 
 
 @_jit
+def user_pair_terms(index, x_a, y_a, z_a, x_b, y_b, z_b, t, out):
+    """Generated: the 51 local terms of SymPy pair constraint ``index`` at the frames'
+    origins (m) and time t s into out (51,).  Stub: no user pair constraints."""
+    for i in range(N_PAIR_TERMS):
+        out[i] = np.nan
+
+
+@_jit
 def user_time_terms(index, t, out):
     """Generated: (f, f', f'') of SymPy time function ``index`` at t s into out (3,)."""
     for i in range(3):
@@ -103,15 +119,16 @@ def model_parts(md):
 
 @_jit
 def constraint_parts(cd):
-    """(c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun)
-    views of cd (module docstring)."""
+    """(c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun,
+    c_point_b) views of cd (module docstring)."""
     ci, cf = cd
     m, n_points, n_fun, n_drive = ci[0], ci[1], ci[2], ci[3]
     o = 4
     c_kind = ci[o:o + m]
     c_point = ci[o + m:o + 2 * m]
     c_fun = ci[o + 2 * m:o + 3 * m]
-    o += 3 * m
+    c_point_b = ci[o + 3 * m:o + 4 * m]
+    o += 4 * m
     p_link = ci[o:o + n_points]
     o += n_points
     f_kind = ci[o:o + n_fun]
@@ -120,9 +137,10 @@ def constraint_parts(cd):
     d_coord = ci[o:o + n_drive]
     d_fun = ci[o + n_drive:o + 2 * n_drive]
     c_par = cf[:4 * m].reshape((m, 4))
-    p_r = cf[4 * m:4 * m + 3 * n_points].reshape((n_points, 3))
-    f_par = cf[4 * m + 3 * n_points:]
-    return c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun
+    p_r = cf[4 * m:4 * m + 4 * n_points].reshape((n_points, 4))
+    f_par = cf[4 * m + 4 * n_points:]
+    return (c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun,
+            c_point_b)
 
 
 @_jit
@@ -193,7 +211,7 @@ def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
 def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa, ws):
     """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
     value is not finite.  ws: float scratch of rows_scratch_size(n, n_points)."""
-    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _ = \
+    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _, c_point_b = \
         constraint_parts(cd)
     m = c_kind.shape[0]
     n = q.shape[0]
@@ -204,12 +222,13 @@ def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa
     used = 9 * n_points
     jac = ws[used:used + 3 * n * n_points].reshape((n_points, 3, n))
     used += 3 * n * n_points
-    lt = ws[used:used + 18]
-    tf = ws[used + 18:used + 21]
-    scratch = ws[used + 21:used + 21 + POINT_SCRATCH]
+    lt = ws[used:used + N_PAIR_TERMS]
+    tf = ws[used + N_PAIR_TERMS:used + N_PAIR_TERMS + 3]
+    used += N_PAIR_TERMS + 3
+    scratch = ws[used:used + POINT_SCRATCH]
     for k in range(n_points):
-        point_into(t_all, s_all, moves, q_dot, p_link[k], p_r[k], 1.0, pos[k], vel[k], jac[k],
-                   drift[k], scratch)
+        point_into(t_all, s_all, moves, q_dot, p_link[k], p_r[k], p_r[k, 3], pos[k], vel[k],
+                   jac[k], drift[k], scratch)
     for c in range(m):
         kind = c_kind[c]
         if kind == C_JOINT:
@@ -221,6 +240,12 @@ def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa
             a[c, k] = 1.0
             phi_dot[c] = q_dot[k] - tf[1]
             kappa[c] = -tf[2]
+        elif kind >= C_RELATIVE:
+            pa, pb = c_point[c], c_point_b[c]
+            _pair_terms(kind, c_par[c], c_fun[c], f_kind, f_off, f_par, pos[pa], pos[pb], t,
+                        lt, tf)
+            _pair_row(c, lt, vel[pa], vel[pb], jac[pa], jac[pb], drift[pa], drift[pb], phi,
+                      phi_dot, a, kappa)
         else:
             pt = c_point[c]
             _local_terms(kind, c_par[c], c_fun[c], f_kind, f_off, f_par, pos[pt], t, lt, tf)
@@ -243,9 +268,76 @@ def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa
 
 
 @_jit
+def _pair_terms(kind, par, fun, f_kind, f_off, f_par, sa, sb, t, out, tf):
+    """The 51 local terms (N_PAIR_TERMS) of a pair constraint at the world vectors sa, sb
+    (3,) -> out; gpme_core.pair_constraints has the formulas.  A distance between
+    coinciding origins gives NaN (the caller reports it through the Python path)."""
+    for i in range(N_PAIR_TERMS):
+        out[i] = 0.0
+    if kind == C_USER_PAIR:
+        user_pair_terms(int(par[0]), sa[0], sa[1], sa[2], sb[0], sb[1], sb[2], t, out)
+        return
+    time_function(f_kind[fun], f_off[fun], f_par, t, tf)
+    out[43], out[50] = -tf[1], -tf[2]
+    if kind == C_RELATIVE:
+        axis = int(par[0])
+        out[0] = sb[axis] - sa[axis] - tf[0]
+        out[1 + axis], out[4 + axis] = -1.0, 1.0
+    elif kind == C_DISTANCE:
+        dx, dy, dz = sb[0] - sa[0], sb[1] - sa[1], sb[2] - sa[2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if not length > 1e-12:
+            out[0] = np.nan
+            return
+        e0, e1, e2 = dx / length, dy / length, dz / length
+        out[0] = length - tf[0]
+        out[1], out[2], out[3], out[4], out[5], out[6] = -e0, -e1, -e2, e0, e1, e2
+        e = (e0, e1, e2)
+        for i in range(3):
+            for j in range(3):
+                p = ((1.0 if i == j else 0.0) - e[i] * e[j]) / length
+                out[7 + 6 * i + j] = p
+                out[7 + 6 * i + j + 3] = -p
+                out[7 + 6 * (i + 3) + j] = -p
+                out[7 + 6 * (i + 3) + j + 3] = p
+    else:                                   # C_AXIS_DOT
+        out[0] = sa[0] * sb[0] + sa[1] * sb[1] + sa[2] * sb[2] - tf[0]
+        for i in range(3):
+            out[1 + i], out[4 + i] = sb[i], sa[i]
+            out[7 + 6 * i + i + 3] = 1.0
+            out[7 + 6 * (i + 3) + i] = 1.0
+
+
+@_jit
+def _pair_row(c, lt, va, vb, ja, jb, da, db, phi, phi_dot, a, kappa):
+    """Row c of a pair constraint from its 51 local terms lt and both vectors' velocity
+    (3,), Jacobian (3, n) and drift (3,): a = grad^T J, Phi_dot = grad . s_dot + phi_t,
+    kappa = grad . d + s_dot^T H s_dot + 2 grad_t . s_dot + phi_tt (s stacked (a, b))."""
+    n = ja.shape[1]
+    for j in range(n):
+        acc = 0.0
+        for i in range(3):
+            acc += lt[1 + i] * ja[i, j] + lt[4 + i] * jb[i, j]
+        a[c, j] = acc
+    pd, grad_d, quad, grad_t = lt[43], 0.0, 0.0, 0.0
+    for i in range(6):
+        vi = va[i] if i < 3 else vb[i - 3]
+        di = da[i] if i < 3 else db[i - 3]
+        pd += lt[1 + i] * vi
+        grad_d += lt[1 + i] * di
+        grad_t += lt[44 + i] * vi
+        for j in range(6):
+            vj = va[j] if j < 3 else vb[j - 3]
+            quad += vi * lt[7 + 6 * i + j] * vj
+    phi[c] = lt[0]
+    phi_dot[c] = pd
+    kappa[c] = grad_d + quad + 2.0 * grad_t + lt[50]
+
+
+@_jit
 def rows_scratch_size(n, n_points):
     """Length of the float scratch of :func:`constraint_rows`."""
-    return 9 * n_points + 3 * n * n_points + 21 + POINT_SCRATCH
+    return 9 * n_points + 3 * n * n_points + N_PAIR_TERMS + 3 + POINT_SCRATCH
 
 
 # above this size the reduced matrix is factorised by LAPACK (blocked, faster); below
@@ -478,7 +570,7 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
     origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _, \
         parents, moves = model_parts(md)
-    _, _, _, _, _, _, f_kind, f_off, f_par, d_coord, d_fun = constraint_parts(cd)
+    _, _, _, _, _, _, f_kind, f_off, f_par, d_coord, d_fun, _ = constraint_parts(cd)
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
     n = q.shape[0]

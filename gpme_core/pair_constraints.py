@@ -43,7 +43,7 @@ from .time_functions import Constant, TimeFunction
 
 AXIS_NAMES = ("x", "y", "z")
 POINT, DIRECTION = 1.0, 0.0       # homogeneous coordinate of an origin and of an axis
-_PAIR_SYMBOLS = ("x_a", "y_a", "z_a", "x_b", "y_b", "z_b", "t")
+PAIR_SYMBOL_NAMES = ("x_a", "y_a", "z_a", "x_b", "y_b", "z_b", "t")
 _ZERO6 = np.zeros(6)
 _ZERO66 = np.zeros((6, 6))
 
@@ -175,10 +175,10 @@ class AxisAlignment(PairConstraint):
 
 
 _DOT_HESSIAN = np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]])
-_PAIR_TERM_NAMES = (("phi",) + tuple(f"grad[{s}]" for s in _PAIR_SYMBOLS[:6])
-                    + tuple(f"Hessian[{a}, {b}]" for a in _PAIR_SYMBOLS[:6]
-                            for b in _PAIR_SYMBOLS[:6])
-                    + ("phi_t",) + tuple(f"grad_t[{s}]" for s in _PAIR_SYMBOLS[:6])
+_PAIR_TERM_NAMES = (("phi",) + tuple(f"grad[{s}]" for s in PAIR_SYMBOL_NAMES[:6])
+                    + tuple(f"Hessian[{a}, {b}]" for a in PAIR_SYMBOL_NAMES[:6]
+                            for b in PAIR_SYMBOL_NAMES[:6])
+                    + ("phi_t",) + tuple(f"grad_t[{s}]" for s in PAIR_SYMBOL_NAMES[:6])
                     + ("phi_tt",))
 N_PAIR_TERMS = len(_PAIR_TERM_NAMES)       # 51
 
@@ -194,8 +194,8 @@ class SympyPairConstraint(PairConstraint):
     not finite."""
 
     def __init__(self, expr, frame_a, frame_b, name="Phi", symbols=None):
-        syms = symbols or sp.symbols(" ".join(_PAIR_SYMBOLS))
-        by_name = dict(zip(_PAIR_SYMBOLS, syms))
+        syms = symbols or sp.symbols(" ".join(PAIR_SYMBOL_NAMES))
+        by_name = dict(zip(PAIR_SYMBOL_NAMES, syms))
         label = f"constraint {name!r}"
         parsed, problems = checks.read_expression(
             expr, by_name, label, "x_a, y_a, z_a, x_b, y_b, z_b (world coordinates of the "

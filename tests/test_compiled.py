@@ -27,7 +27,7 @@ once when the kernel cache (GPME_KERNEL_CACHE, default ~/.cache/gpme/kernels) is
 import numpy as np
 import pytest
 
-from conftest import spatial_arm
+from conftest import spatial_arm, spatial_tree
 from gpme_core import compiled, fast, kernels
 from gpme_core import transforms as tf
 from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, JointProgramme,
@@ -139,7 +139,21 @@ SYSTEMS = {
     "arm_no_constraints": lambda: ProgrammedMotion(ARM),
     **{f"arm_{name}": (lambda c=c: ProgrammedMotion(ARM, c))
        for name, c in _arm_constraints().items()},
+    "tree_no_constraints": lambda: ProgrammedMotion(spatial_tree()),
+    "tree_pair_constraints": lambda: ProgrammedMotion(spatial_tree(), _pair_constraints()),
 }
+
+
+def _pair_constraints():
+    """Every kind of gpme_core.pair_constraints between frames E and F of the tree (two
+    branches), time dependent where it can be; the SymPy one is generated code."""
+    from gpme_core.pair_constraints import (AxisAlignment, Distance, RelativeCoordinate,
+                                            SympyPairConstraint)
+    return [RelativeCoordinate("E", "F", "x", Cosine(0.1, 0.2, 3.0), name="rel_x"),
+            Distance("E", "F", QuinticRamp(0.5, 1.0), name="rod"),
+            AxisAlignment("E", "y", "F", "z", Sine(0.0, 0.1, 2.0, 0.3), name="angle"),
+            SympyPairConstraint("(x_b - x_a)**2 + y_b*z_a - 0.1*sin(3*t)", "E", "F",
+                                name="sym")]
 
 
 # ---------------------------------------------------------------- the comparison
