@@ -109,14 +109,14 @@ RFEM = "gpme_core/rfem.py"
 CATALOGUE = (
     # ------------------------------------------------ trace-form terms (gpme_core/fast.py)
     Fault("M-composite", MASS_MATRIX, FAST,
-          "hc[a, c] += hw[j, a, c]",
-          "hc[a, c] += 1.001 * hw[j, a, c]", 1e-3,
+          "hcj[a, c] += hw[j, a, c]",
+          "hcj[a, c] += 1.001 * hw[j, a, c]", 1e-3,
           "the composite world pseudo-inertias Hc_j that M is formed from are 1.001 x too "
           "large (M only; h and g use their own sums)"),
     Fault("h-coriolis", VELOCITY_PRODUCTS, FAST,
-          "tmp[i, j] = 2.0 * v_prev[i, j] + s_all[l, i, j] * w",
-          "tmp[i, j] = 1.998 * v_prev[i, j] + s_all[l, i, j] * w", 1e-3,
-          "the factor 2 of the Coriolis products 2 V_{l-1} S_l q_dot_l in the velocity-"
+          "tmp[i, j] = 2.0 * v_all[p, i, j] + sw",
+          "tmp[i, j] = 1.998 * v_all[p, i, j] + sw", 1e-3,
+          "the factor 2 of the Coriolis products 2 V_p(l) S_l q_dot_l in the velocity-"
           "product accelerations B_l is 1.998"),
     Fault("g-scale", GRAVITY, FAST,
           "g[j] = -gj",

@@ -309,29 +309,29 @@ def _pair_terms(kind, par, fun, f_kind, f_off, f_par, sa, sb, t, out, tf):
 
 
 @_jit
-def _pair_row(c, lt, va, vb, ja, jb, da, db, phi, phi_dot, a, kappa):
-    """Row c of a pair constraint from its 51 local terms lt and both vectors' velocity
+def _pair_row(c, terms, va, vb, ja, jb, da, db, phi, phi_dot, a, kappa):
+    """Row c of a pair constraint from its 51 local terms and both vectors' velocity
     (3,), Jacobian (3, n) and drift (3,): a = grad^T J, Phi_dot = grad . s_dot + phi_t,
     kappa = grad . d + s_dot^T H s_dot + 2 grad_t . s_dot + phi_tt (s stacked (a, b))."""
     n = ja.shape[1]
     for j in range(n):
         acc = 0.0
         for i in range(3):
-            acc += lt[1 + i] * ja[i, j] + lt[4 + i] * jb[i, j]
+            acc += terms[1 + i] * ja[i, j] + terms[4 + i] * jb[i, j]
         a[c, j] = acc
-    pd, grad_d, quad, grad_t = lt[43], 0.0, 0.0, 0.0
+    pd, grad_d, quad, grad_t = terms[43], 0.0, 0.0, 0.0
     for i in range(6):
         vi = va[i] if i < 3 else vb[i - 3]
         di = da[i] if i < 3 else db[i - 3]
-        pd += lt[1 + i] * vi
-        grad_d += lt[1 + i] * di
-        grad_t += lt[44 + i] * vi
+        pd += terms[1 + i] * vi
+        grad_d += terms[1 + i] * di
+        grad_t += terms[44 + i] * vi
         for j in range(6):
             vj = va[j] if j < 3 else vb[j - 3]
-            quad += vi * lt[7 + 6 * i + j] * vj
-    phi[c] = lt[0]
+            quad += vi * terms[7 + 6 * i + j] * vj
+    phi[c] = terms[0]
     phi_dot[c] = pd
-    kappa[c] = grad_d + quad + 2.0 * grad_t + lt[50]
+    kappa[c] = grad_d + quad + 2.0 * grad_t + terms[50]
 
 
 @_jit
