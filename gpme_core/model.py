@@ -454,11 +454,18 @@ class ChainBuilder:
         self._drives = []
         self._flex = []
         self._pending_origin = np.eye(4)   # offset of the next joint (e.g. a beam tip)
+        self._link_pending = {}            # {link: its offset, kept when it stops being newest}
         self._shapes = []                  # gpme_core.geometry.Shape of the links
 
     @property
     def n_joints(self):
         return len(self._joints)
+
+    @property
+    def current_link(self):
+        """Name of the newest link (what bodies, frames and an unparented joint attach to;
+        after :meth:`add_beam`, the beam's last segment), None before the first joint."""
+        return self._link_names[-1] if self._link_names else None
 
     def add_joint(self, name, kind, axis, origin=None, stiffness=0.0, spring_reference=0.0,
                   damping=0.0, link=None, limits=(-np.inf, np.inf), parent=None):
@@ -466,12 +473,17 @@ class ChainBuilder:
 
         parent : None to mount it on the current (newest) link, as in a serial chain; or
                  the name of an earlier link, or WORLD, to start a branch there.
-        origin : (4, 4) joint frame at q = 0 in the parent link frame (after a pending
-                 beam-tip offset when mounted on the current link)."""
+        origin : (4, 4) joint frame at q = 0 in the parent link frame, after the parent's
+                 attachment offset (a beam's tip, when the parent is a beam's last
+                 segment: :meth:`current_link` after :meth:`add_beam` names it)."""
         origin = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
+        if self._link_names:       # the newest link keeps its attachment point for branches
+            self._link_pending[self._link_names[-1]] = self._pending_origin
         on_current = parent is None or (self._link_names and parent == self._link_names[-1])
-        if origin.shape == (4, 4) and on_current:
-            origin = self._pending_origin @ origin
+        pending = self._pending_origin if on_current else \
+            self._link_pending.get(parent, np.eye(4))
+        if origin.shape == (4, 4):
+            origin = pending @ origin
         self._pending_origin = np.eye(4)
         axis = tuple(float(a) for a in np.ravel(axis))
         self._joints.append(Joint(name, kind, axis, origin, float(stiffness),

@@ -12,6 +12,9 @@ back.  docs/urdf.md shows the layout:
     massless_links  : [link names the writer knows carry no mass]
     flexible_links  : [{"name", "n_segments", "beam": BeamProperties fields, "joints", "links"}]
     drives          : [{"joint", "function": a gpme_core.time_functions class name, "parameters"}]
+    tree            : true when every moving joint of the URDF is a coordinate (a model whose
+                      branches all move; written only then, the reader then reads the
+                      whole tree instead of one chain)
 
 This module only knows the file: its path, its text, its validation (our own code, not a
 schema library, on purpose: docs/architecture.md, "Input validation").
@@ -58,6 +61,7 @@ def side_document(model: Model, drives: list) -> dict:
              "links": [model.links[k].name for k in f.link_indices]}
             for f in model.flexible_links],
         "drives": drives,
+        **({} if model.is_chain else {"tree": True}),
     }
 
 
@@ -161,6 +165,12 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
                 problems.append(f"{label}: massless_links must hold link names (non-empty "
                                 f"strings), got {shown(bad)}")
             clean["massless_links"] = [x for x in links if isinstance(x, str) and x]
+    if "tree" in side:
+        if isinstance(side["tree"], bool):
+            clean["tree"] = side["tree"]
+        else:
+            problems.append(f"{label}: tree must be true or false (whether every moving joint "
+                            f"of the URDF is a coordinate), got {shown(side['tree'])}")
     for key, check in (("flexible_links", _check_flexible), ("drives", _check_drive)):
         if key not in side:
             continue
@@ -184,7 +194,7 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
 
 
 SIDE_KEYS = ("format", "version", "model", "gravity", "joints", "massless_links",
-             "flexible_links", "drives")
+             "flexible_links", "drives", "tree")
 JOINT_KEYS = ("stiffness", "spring_reference")
 FLEXIBLE_KEYS = ("name", "n_segments", "beam", "joints", "links")
 DRIVE_KEYS = ("joint", "function", "parameters")

@@ -13,7 +13,7 @@ from gpme_io.urdf import (MUJOCO_BOUND, UNLIMITED, load_side_file, load_urdf, re
                           side_file_path, write_urdf)
 from gpme_examples.crane import CraneParameters, build_crane
 from gpme_core.dynamics import gravity_forces, mass_matrix, velocity_product_terms
-from gpme_core.errors import ModelFileError
+from gpme_core.errors import ModelError, ModelFileError
 from gpme_core.model import REVOLUTE
 
 COMMITTED = sorted(generate_models.URDF_DIR.glob("*.urdf"))
@@ -354,14 +354,22 @@ def test_writer_rejects_name_clash_and_unstorable_drive(tmp_path):
     from gpme_core.model import ChainBuilder
     from gpme_core.inertia import cuboid
     b = ChainBuilder("clash")
-    b.add_joint("q", REVOLUTE, (0, 0, 1), link="world")
+    b.add_joint("q", REVOLUTE, (0, 0, 1), link="arm")
     b.add_body(cuboid(1.0, (0.1, 0.1, 0.1)))
+    b.add_frame("arm", np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4, k=3) * 0.1)
+    # a frame off its link's origin is written as a link of its own name
     b.add_drive("q", lambda t: 1.0)
     model = b.build()
     with pytest.raises(ModelFileError) as exc:
         write_urdf(model, tmp_path / "x.urdf")
-    assert "URDF link names would repeat: ['world']" in str(exc.value)
+    assert "URDF link names would repeat: ['arm']" in str(exc.value)
     assert "drive on 'q'" in str(exc.value) and "include_drives=False" in str(exc.value)
+    # the URDF's root link "world" cannot be a model link: the model refuses the name
+    b = ChainBuilder("clash")
+    b.add_joint("q", REVOLUTE, (0, 0, 1), link="world")
+    b.add_body(cuboid(1.0, (0.1, 0.1, 0.1)))
+    with pytest.raises(ModelError, match="'world': the name is reserved for the world"):
+        b.build()
 
 
 def test_side_file_is_beside_and_validated(tmp_path):

@@ -206,12 +206,13 @@ def _section_y(label, spec, x, bad) -> Optional[NDArray[np.float64]]:
     return y
 
 
-def _beam_plans(flexible, side_flex, chain_links, chain_origin, problems) -> dict:
+def _beam_plans(flexible, side_flex, chain_links, next_origin, problems) -> dict:
     """{link: plan or None} of every valid entry of ``flexible`` ({link: FlexibleSpec}):
     a link moved by a chain joint (``chain_links``, in order) and not already
     RFEM-discretised in the side file (``side_flex``, {name: record}); the others'
-    problems appended.  ``chain_origin``: {k: (4, 4) chain joint k's frame in chain link
-    k - 1's frame}, which gives each beam its next chain joint."""
+    problems appended.  ``next_origin``: {k: (4, 4) frame of the one joint mounted on chain
+    link k, in its frame} (absent for the tip of a chain and a link carrying several
+    branches), which gives each beam its default axis and length."""
     plans = {}
     for lk, spec in flexible.items():
         if lk not in chain_links:
@@ -224,5 +225,5 @@ def _beam_plans(flexible, side_flex, chain_links, chain_origin, problems) -> dic
                             "rigid model to re-discretise it")
             continue
         k = chain_links.index(lk)
-        plans[lk] = _beam_plan(lk, spec, chain_origin.get(k + 1), problems)
+        plans[lk] = _beam_plan(lk, spec, next_origin.get(k), problems)
     return plans

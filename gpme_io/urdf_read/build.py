@@ -9,7 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gpme_core import transforms as tf
-from gpme_core.model import REVOLUTE, STANDARD_GRAVITY, ChainBuilder, Model, validate_model
+from gpme_core.model import (REVOLUTE, STANDARD_GRAVITY, WORLD, ChainBuilder, Model,
+                             validate_model)
 from gpme_core.rfem import BeamProperties, FlexibleLinkInfo
 
 from ..side_file import drive_function
@@ -27,12 +28,13 @@ def _builder(robot, side, gravity, name, notes) -> ChainBuilder:
     return ChainBuilder(name or side.get("model") or robot_name or "urdf", gravity=g)
 
 
-def _assemble(builder, chain, placement, side_use, inertias, flexible, plans,
+def _assemble(builder, chain, parents, placement, side_use, inertias, flexible, plans,
               notes, shapes=None) -> tuple:
     """(Model, frame names): the chain's joints with the side file's springs, each chain
     link's body or beam, the links merged into it (mass and frame), the side file's drives
     and RFEM records; raises ModelError with the built model's problems.
 
+    parents  : [parent index of each chain joint, -1 the world] (a chain: k - 1)
     inertias : {link: RigidBodyInertia or None}
     flexible : {link: FlexibleSpec}; plans: {link: beam plan or None (invalid spec)}
     shapes   : {link: [gpme_io.urdf_read.shapes.link_shapes tuple]}: what the moving links
@@ -40,15 +42,22 @@ def _assemble(builder, chain, placement, side_use, inertias, flexible, plans,
     """
     shapes = shapes or {}
     frames = []
-    after = np.eye(4)       # correction of the previous link's frame (beam tip)
+    # {k: (builder link that ends URDF link k: its beam's last segment if flexible, the
+    # correction of link k's frame for what hangs on it: the beam tip)}
+    ends = {}
     for k, j in enumerate(chain.joints):
         spring = side_use.joints.get(j.name, {})
+        p = parents[k]
+        end_link, after_p = ends.get(p, (WORLD, np.eye(4)))
+        if end_link == (builder.current_link or WORLD):
+            end_link = None              # continues the newest link: a serial chain's joint
         builder.add_joint(j.name, _MOVING.get(j.type, REVOLUTE), j.axis,
-                          origin=after @ placement.chain_origin[k],
+                          origin=after_p @ placement.chain_origin[k],
                           stiffness=spring.get("stiffness", 0.0),
                           spring_reference=spring.get("spring_reference", 0.0),
-                          damping=j.damping, link=j.child, limits=j.limits)
+                          damping=j.damping, link=j.child, limits=j.limits, parent=end_link)
         after = _add_link_mass(builder, j.child, flexible, plans.get(j.child), inertias, notes)
+        ends[k] = (builder.current_link, after)
         # a chain link's own shapes (a flexible link has none: its elements' instead)
         _add_shapes(builder, shapes.get(j.child, ()), np.eye(4))
         for x in placement.attached.get(k, []):

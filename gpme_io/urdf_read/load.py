@@ -13,14 +13,19 @@ from .read import UrdfReadResult, _read_guarded
 
 
 def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
-              massless_links=(), gravity=None, name=None) -> UrdfReadResult:
-    """Read the URDF at ``path`` into a gpme Model, through a chosen chain.
+              massless_links=(), gravity=None, name=None, whole_tree=False) -> UrdfReadResult:
+    """Read the URDF at ``path`` into a gpme Model, through a chosen chain or as a whole
+    tree.
 
     side_file     : "auto" (``<stem>.gpme.json`` beside the URDF if it exists), None (no
                     side file: stiffness 0, gravity standard) or a path.  It restores
                     stiffness, spring references, gravity, drives and RFEM records.
     chain         : (root link, tip link); None = from the URDF root to the single path of
                     moving joints (error listing the branch ends when there are several).
+    whole_tree    : every moving joint below the root link (``chain`` = (root,) or None)
+                    that is not in ``frozen`` is a coordinate: the model is a tree whose
+                    branches all move (gpme_core.model), its joints parents first in the
+                    file's order.  Also when the side file says ``"tree": true``.
     frozen        : {joint name: value (rad or m)} for joints off the chain; every other
                     moving joint off the chain is frozen at 0 (a mimic joint: multiplier *
                     value + offset of the joint it mimics).  Joints above the chain root
@@ -59,18 +64,19 @@ def load_urdf(path, *, side_file="auto", chain=None, frozen=None, flexible=None,
         problems += bad
     return _read_guarded(data, side, problems, chain=chain, frozen=frozen, flexible=flexible,
                          massless_links=massless_links, gravity=gravity, name=name,
-                         source=source)
+                         source=source, whole_tree=whole_tree)
 
 
 def read_urdf(path, side_file="auto", flexible=None, massless_links=(), gravity=None,
-              name=None, *, chain=None, frozen=None) -> Model:
+              name=None, *, chain=None, frozen=None, whole_tree=False) -> Model:
     """The Model of :func:`load_urdf` (same arguments), without the report."""
     return load_urdf(path, side_file=side_file, chain=chain, frozen=frozen, flexible=flexible,
-                     massless_links=massless_links, gravity=gravity, name=name).model
+                     massless_links=massless_links, gravity=gravity, name=name,
+                     whole_tree=whole_tree).model
 
 
 def parse_urdf(text, side=None, flexible=None, massless_links=(), gravity=None, name=None,
-               source="<urdf>", *, chain=None, frozen=None) -> Model:
+               source="<urdf>", *, chain=None, frozen=None, whole_tree=False) -> Model:
     """:func:`read_urdf` on URDF ``text`` (str or bytes) and a side-file dict ``side`` (or
     None)."""
     problems = []
@@ -78,4 +84,4 @@ def parse_urdf(text, side=None, flexible=None, massless_links=(), gravity=None, 
         side, problems = check_side_file(side)
     return _read_guarded(text, side, problems, chain=chain, frozen=frozen, flexible=flexible,
                          massless_links=massless_links, gravity=gravity, name=name,
-                         source=source).model
+                         source=source, whole_tree=whole_tree).model

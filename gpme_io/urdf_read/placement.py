@@ -13,11 +13,12 @@ import numpy as np
 
 @dataclass(frozen=True)
 class _Chain:
-    """The chain read: its root and tip links and its joints (the _Joint of each gpme
-    coordinate, in path order from the root)."""
+    """The chain (or tree) read: its root and tip links (tip None for a whole tree) and its
+    joints (the _Joint of each gpme coordinate, in path order from the root; for a tree,
+    each joint after the joint that moves its parent link)."""
 
     root: str
-    tip: str
+    tip: object
     joints: list
 
     @property
@@ -49,7 +50,8 @@ class _Placement:
     pose         : {link: (4, 4) its frame in its owner's link frame (the URDF root
                    link's frame for _WORLD)}; identity for the chain links themselves
     attached     : {k: [links merged into owner k], in breadth-first order}
-    chain_origin : {k: (4, 4) chain joint k's frame in the frame of owner k - 1}
+    chain_origin : {k: (4, 4) chain joint k's frame in the frame of the owner of its parent
+                   link (owner k - 1 in a chain; :func:`_parents` gives it for a tree)}
     """
 
     owner: dict
@@ -81,3 +83,9 @@ def _place(tree, chain_index, values) -> _Placement:
                 attached.setdefault(owner[link], []).append(j.child)
             stack.append(j.child)
     return _Placement(owner, pose, attached, chain_origin)
+
+
+def _parents(chain, placement) -> list:
+    """[parent index of each chain joint]: the owner of the joint's parent link (_WORLD =
+    -1 for a link fixed to the URDF root), the gpme_core.model.Model.parents of the model."""
+    return [placement.owner[j.parent] for j in chain.joints]

@@ -22,10 +22,10 @@ from .masses import (_geometry_problems, _inertial_problems, _massless_note, _me
                      _size_problem)
 from .notes import _Notes
 from .parse import _parse, _parse_xml
-from .placement import _WORLD, _Chain, _place
+from .placement import _WORLD, _Chain, _parents, _place
 from .shapes import link_shapes, robot_materials
 from .side_match import _match_side
-from .tree import _CHAIN_SKIPPED, _path, _select_chain, _tree
+from .tree import _CHAIN_SKIPPED, _path, _select_chain, _select_tree, _tree
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ def _read_guarded(text, side, problems, **kwargs) -> UrdfReadResult:
 
 
 def _read(text, side, problems, *, chain, frozen, flexible, massless_links, gravity, name,
-          source) -> UrdfReadResult:
+          source, whole_tree=False) -> UrdfReadResult:
     """The read of URDF ``text`` (str, bytes or None: unreadable, its problem in
     ``problems``) with the checked side-file dict ``side`` (or None); the keywords are
     :func:`load_urdf`'s, ``source`` names the file in the problems.  Raises
@@ -90,7 +90,8 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
     flexible = dict(flexible or {})
     side = side or {}
     parsed = _parse(robot, problems, notes)
-    tree, picked = _choose_chain(parsed, chain, frozen, problems, source)
+    whole_tree = whole_tree or bool(side.get("tree"))
+    tree, picked = _choose_chain(parsed, chain, frozen, problems, source, whole_tree)
     above = _path(tree, tree.root, picked.root)
     values = _frozen_values(tree, parsed.joints, picked.joints, above, frozen, problems, notes)
     placement = _place(tree, picked.index, values)
@@ -100,8 +101,9 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
     _geometry_problems(parsed, placement, picked, allowed_massless, flexible, problems)
     _merge_notes(parsed, placement, picked, values, notes)
     side_use = _match_side(side, tree, picked, side_massless, problems)
-    plans = _beam_plans(flexible, side_use.flexible, picked.links, placement.chain_origin,
-                        problems)
+    parents = _parents(picked, placement)
+    plans = _beam_plans(flexible, side_use.flexible, picked.links,
+                        _next_origins(parents, placement.chain_origin), problems)
     _massless_note(parsed, placement, picked, allowed_massless, flexible, notes)
     size_problem = _size_problem(tree, placement.owner, parsed.inertias)
     if size_problem:
@@ -113,8 +115,8 @@ def _read(text, side, problems, *, chain, frozen, flexible, massless_links, grav
     shapes = _read_shapes(robot, parsed, placement, flexible, source, notes)
     model, frames = None, ()
     try:
-        model, frames = _assemble(builder, picked, placement, side_use, parsed.inertias,
-                                  flexible, plans, notes, shapes)
+        model, frames = _assemble(builder, picked, parents, placement, side_use,
+                                  parsed.inertias, flexible, plans, notes, shapes)
     except ModelError as exc:
         suffix = (" (found with the invalid <inertial> elements above left out)"
                   if set(parsed.bad_inertia) - set(world_fixed_bad) else "")
@@ -145,12 +147,32 @@ def _read_shapes(robot, parsed, placement, flexible, source, notes) -> dict:
     return out
 
 
-def _choose_chain(parsed, chain, frozen, problems, source) -> tuple:
-    """(_Tree, _Chain) of the parsed links and joints and the ``chain`` choice; without a
-    tree or a chain, raises ModelFileError with the problems so far (the invalid
-    <inertial> elements first: whether they matter cannot be told without a chain)."""
+def _next_origins(parents, chain_origin) -> dict:
+    """{k: (4, 4) frame of the one joint mounted on link k, in link k's frame} for the
+    links that carry exactly one joint (a beam's default axis points at it; a link with
+    several or none has no default)."""
+    children = {}
+    for k, p in enumerate(parents):
+        children.setdefault(p, []).append(k)
+    return {p: chain_origin[ks[0]] for p, ks in children.items() if len(ks) == 1 and p >= 0}
+
+
+def _choose_chain(parsed, chain, frozen, problems, source, whole_tree=False) -> tuple:
+    """(_Tree, _Chain) of the parsed links and joints and the ``chain`` choice (or, with
+    ``whole_tree``, every moving joint below the root ``chain[0]``); without a tree or a
+    chain, raises ModelFileError with the problems so far (the invalid <inertial>
+    elements first: whether they matter cannot be told without a chain)."""
     tree = _tree(parsed.links, parsed.joints, problems, parsed.left_out)
-    picked = _select_chain(tree, chain, frozen, problems) if tree is not None else None
+    if tree is not None and whole_tree:
+        if chain is not None and len(chain) == 2 and chain[1] is not None:
+            problems.append(f"a whole tree has no tip link, got chain {chain!r}: give only "
+                            "its root")
+            picked = None
+        else:
+            picked = _select_tree(tree, None if chain is None else chain[0], frozen,
+                                  problems)
+    else:
+        picked = _select_chain(tree, chain, frozen, problems) if tree is not None else None
     if picked is None:
         if tree is not None:
             problems[-1] += _CHAIN_SKIPPED

@@ -1,10 +1,12 @@
-"""The kinematic tree of a URDF's links and joints, and the chain read from it.
+"""The kinematic tree of a URDF's links and joints, and the chain or tree read from it.
 
 :func:`_tree` checks that the joints form one tree (no link the child of two joints, no
 cycle, one root, every link reached) before anything walks it; every walk visits each
 link and joint a bounded number of times, whatever a hostile file holds.  :func:`_path`,
 :func:`_subtree_joints` and :func:`_select_chain` read the tree: the chain is the moving
-joints on the path from the chain's root link to its tip link.
+joints on the path from the chain's root link to its tip link.  :func:`_select_tree`
+takes every moving joint below a root link instead (a model whose branches all move),
+parents before children.
 """
 from dataclasses import dataclass
 from typing import Optional, Sequence
@@ -214,3 +216,36 @@ def _select_chain(tree, chain, frozen, problems):
                         "prismatic joint")
         return None
     return root, tip, moving
+
+
+def _preorder_joints(tree, link):
+    """Joints below link ``link``, each before the joints below it, siblings in the file's
+    order (depth first, pre-order: Pinocchio's and MuJoCo's numbering); each link is
+    entered once."""
+    out, stack, seen = [], [iter(tree.children[link])], {link}
+    while stack:
+        j = next(stack[-1], None)
+        if j is None:
+            stack.pop()
+            continue
+        out.append(j)
+        if j.child not in seen:
+            seen.add(j.child)
+            stack.append(iter(tree.children[j.child]))
+    return out
+
+
+def _select_tree(tree, root, frozen, problems):
+    """(root, None, moving joints below ``root`` not in ``frozen``, parents first) or None;
+    appends the problems of the choice (an unknown root, no moving joint)."""
+    root = tree.root if root is None else root
+    if root not in tree.children:
+        problems.append(f"tree root {root!r}: not a link of the file; links: "
+                        f"{sorted(tree.children)}")
+        return None
+    moving = [j for j in _preorder_joints(tree, root) if j.moving and j.name not in frozen]
+    if not moving:
+        problems.append(f"no revolute, continuous or prismatic joint below link {root!r} "
+                        "(frozen joints do not count)")
+        return None
+    return root, None, moving
