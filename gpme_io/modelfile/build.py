@@ -23,6 +23,8 @@ from gpme_core.errors import ConstraintError, ModelError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import Drive, Frame, Model, validate_model
+from gpme_core.pair_constraints import (Distance, RelativeCoordinate, SympyPairConstraint,
+                                        aligned, coincident, weld)
 from gpme_core.rfem import BeamSection
 from gpme_core.stability import STEP_SAFETY, rk4_limit, safe_step
 from gpme_core.statics import static_equilibrium
@@ -34,7 +36,8 @@ from gpme_io.side_file import side_file_path
 from gpme_io.urdf_reader import FlexibleLink, load_urdf
 
 from .schema import (CoordinateConstraintSpec, CraneSource, EllipseConstraintSpec,
-                     ExpressionConstraintSpec, ModelFile, UrdfSource)
+                     ExpressionConstraintSpec, ModelFile, PairConstraintSpec, UrdfSource,
+                     constraint_frames)
 
 # STEP_SAFETY (gpme_core.stability): fraction of the RK4 stability step used when dt is not given
 
@@ -97,14 +100,19 @@ def _urdf_model(spec: ModelFile, src: UrdfSource) -> SourceModel:
             problems += [f"{f.key}.section: {p}" for p in exc.problems]
     # the URDF is read even when a [[flexible]] section is wrong (with the valid ones), so
     # that its problems are listed with the section's, not after it is fixed
-    chain = spec.chain
-    ends = None if chain is None or (chain.root is None and chain.tip is None) \
-        else (chain.root, chain.tip)
+    chain, tree = spec.chain, spec.tree
+    if tree is not None:
+        ends = None if tree.root is None else (tree.root,)
+        frozen = dict(tree.frozen)
+    else:
+        ends = None if chain is None or (chain.root is None and chain.tip is None) \
+            else (chain.root, chain.tip)
+        frozen = dict(chain.frozen) if chain is not None else {}
     try:
         res = load_urdf(src.path, side_file=src.side_file if src.side_file else "auto",
-                        chain=ends, frozen=dict(chain.frozen) if chain is not None else {},
-                        flexible=flexible, gravity=tuple(spec.model.gravity),
-                        name=spec.model.name)
+                        chain=ends, frozen=frozen, flexible=flexible,
+                        gravity=tuple(spec.model.gravity), name=spec.model.name,
+                        whole_tree=tree is not None)
     except ModelError as exc:
         raise ModelFileError(problems + [f"model.urdf ({src.written}): {p}"
                                          for p in exc.problems]) from None
@@ -154,8 +162,10 @@ def reference_problems(spec: ModelFile, model: Model) -> list:
             out.append(f"{d.key}.joint: " + _unknown("coordinate", d.joint, coords))
     frames = sorted(model.frames) + [lk.name for lk in model.links if lk.name not in model.frames]
     for c in spec.constraints:
-        if c.frame not in frames:
-            out.append(f"{c.key}.frame: " + _unknown("frame or link", c.frame, frames))
+        field = "frames" if isinstance(c, PairConstraintSpec) else "frame"
+        for frame in constraint_frames(c):
+            if frame not in frames:
+                out.append(f"{c.key}.{field}: " + _unknown("frame or link", frame, frames))
     for p in spec.programmes:
         if p.joint not in coords:
             out.append(f"{p.key}.joint: " + _unknown("coordinate", p.joint, coords))
@@ -206,10 +216,11 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
     frames = dict(model.frames)
     link_index = {lk.name: k for k, lk in enumerate(model.links)}
     for c in spec.constraints:
-        if c.frame not in frames:
-            frames[c.frame] = Frame(c.frame, link_index[c.frame], np.eye(4))
-            notes.append(f"{c.key}: frame {c.frame!r} is the frame of link {c.frame!r} (its "
-                         "joint frame; the constraint acts on its origin)")
+        for frame in constraint_frames(c):
+            if frame not in frames:
+                frames[frame] = Frame(frame, link_index[frame], np.eye(4))
+                notes.append(f"{c.key}: frame {frame!r} is the frame of link {frame!r} (its "
+                             "joint frame; the constraint acts on its origin and axes)")
     for d in spec.drives:
         if isinstance(d.function, Tabulated):
             notes.append(_table_note(d.key, d.function, "N or N m"))
@@ -225,7 +236,7 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
     except ModelError as exc:
         raise ModelFileError([f"{label}: joint: {p}" for p in exc.problems]) from None
 
-    constraints = [_constraint(c) for c in spec.constraints]
+    constraints = [row for c in spec.constraints for row in _constraint(c)]
     constraints += [JointProgramme(p.joint, SympyTimeFunction(p.expression, ex.symbol("t")),
                                    name=p.name) for p in spec.programmes]
     system = ProgrammedMotion(model, constraints, dependent=spec.solver.dependent,
@@ -289,12 +300,31 @@ def _yield_strengths(spec, model):
     return {f.link: f.yield_strength for f in spec.flexible if f.yield_strength is not None}
 
 
-def _constraint(c):
+def _constraint(c) -> list:
+    """The gpme_core constraints of one [[constraint]] entry (several rows for a
+    coincidence, an alignment or a weld), named as ``constraint_rows`` says."""
+    if isinstance(c, PairConstraintSpec):
+        return _pair_constraints(c)
     if isinstance(c, ExpressionConstraintSpec):
-        return SympyPointConstraint(c.phi, frame=c.frame, name=c.name)
+        return [SympyPointConstraint(c.phi, frame=c.frame, name=c.name)]
     if isinstance(c, EllipseConstraintSpec):
-        return EllipseConstraint(c.a, c.b, center=c.center, frame=c.frame, name=c.name)
-    return CoordinateProgramme(c.function, axis=c.axis, frame=c.frame, name=c.name)
+        return [EllipseConstraint(c.a, c.b, center=c.center, frame=c.frame, name=c.name)]
+    return [CoordinateProgramme(c.function, axis=c.axis, frame=c.frame, name=c.name)]
+
+
+def _pair_constraints(c) -> list:
+    a, b = c.frames
+    if c.kind == "expression":
+        return [SympyPairConstraint(c.phi, a, b, name=c.name)]
+    if c.kind == "relative":
+        return [RelativeCoordinate(a, b, c.axis, c.function, name=c.name)]
+    if c.kind == "distance":
+        return [Distance(a, b, c.function, name=c.name)]
+    rows = {"coincident": lambda: coincident(a, b, c.axes, name=c.name),
+            "aligned": lambda: aligned(a, b, name=c.name),
+            "weld": lambda: weld(a, b, name=c.name)}[c.kind]()
+    assert tuple(r.name for r in rows) == c.row_names
+    return rows
 
 
 def _table_note(key: str, fn: Tabulated, unit: str) -> str:
@@ -309,6 +339,11 @@ def _check_finite_at(spec: ModelFile, model: Model, q0, label: str) -> None:
     kin = chain_kinematics(model, q0)
     problems = []
     for c in spec.constraints:
+        if isinstance(c, PairConstraintSpec) and c.kind == "expression":
+            problem = _pair_expression_problem(model, kin, c, label)
+            if problem:
+                problems.append(problem)
+            continue
         if not isinstance(c, ExpressionConstraintSpec):
             continue
         fr = model.frame(c.frame)
@@ -325,6 +360,23 @@ def _check_finite_at(spec: ModelFile, model: Model, q0, label: str) -> None:
             + "; the GPME needs phi twice differentiable along the motion")
     if problems:
         raise ModelFileError(problems)
+
+
+def _pair_expression_problem(model: Model, kin, c, label: str) -> str:
+    """'' when a pair expression and its derivatives are finite at (t = 0, kin), else the
+    problem (the frames' origins, what is not finite, where the formula is not smooth)."""
+    spec = SympyPairConstraint(c.phi, *c.frames, name=c.name)
+    ends = []
+    for frame in c.frames:
+        fr = model.frame(frame)
+        ends.append((kin.T[fr.link_index] @ fr.transform[:, 3])[:3])
+    try:
+        spec.local_terms(np.concatenate(ends), 0.0)
+        return ""
+    except ConstraintError as exc:
+        sets = ex.singular_sets(c.phi)
+        return (f"{label}: {c.key}.phi: {exc}" + (f"; it is not smooth {'; '.join(sets)}"
+                                                   if sets else ""))
 
 
 def _on_constraints(system: ProgrammedMotion, q0, q_dot0, label: str):

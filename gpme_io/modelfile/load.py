@@ -26,13 +26,14 @@ from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
 from gpme_io.xml_text import xml_char_problem
 
 from gpme_io import expressions as ex
-from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, POINT_SYMBOLS, SECTION_SHAPES,
-                     TIME_SYMBOLS, ChainSection, CoordinateConstraintSpec, CraneSource,
-                     DriveSpec, EllipseConstraintSpec, ExpressionConstraintSpec, FlexibleSpec,
-                     InitialSpec, JointSpec, ModelFile, ModelSection, ProgrammeSpec, RunSpec,
-                     SectionSpec, SolverSpec, UrdfSource)
+from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, PAIR_KINDS, PAIR_SYMBOLS,
+                     POINT_SYMBOLS, SECTION_SHAPES, TIME_SYMBOLS, ChainSection,
+                     CoordinateConstraintSpec, CraneSource, DriveSpec, EllipseConstraintSpec,
+                     ExpressionConstraintSpec, FlexibleSpec, InitialSpec, JointSpec, ModelFile,
+                     ModelSection, PairConstraintSpec, ProgrammeSpec, RunSpec, SectionSpec,
+                     SolverSpec, TreeSection, UrdfSource, constraint_rows)
 
-TOP_LEVEL = ("model", "chain", "flexible", "joint", "drive", "constraint", "programme",
+TOP_LEVEL = ("model", "chain", "tree", "flexible", "joint", "drive", "constraint", "programme",
              "solver", "initial", "run", "tolerance", "engine_step")
 ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "constraint", "programme", "tolerance",
                     "engine_step")
@@ -276,6 +277,10 @@ def parse_model_data(data: dict, path: Path) -> tuple:
     model = _model_section(c, data, path)
     is_builtin = model is not None and isinstance(model.source, CraneSource)
     chain = _chain_section(c, data, is_builtin)
+    tree = _tree_section(c, data, is_builtin)
+    if chain is not None and tree is not None:
+        c.add("tree", "a model is one chain ([chain]) or a whole tree ([tree]), not both; "
+              "remove one of the sections")
     run = _run_section(c, data)
     t_end = run.t_end if run is not None else None
     flexible = tuple(f for k, e in enumerate(entries["flexible"])
@@ -292,10 +297,10 @@ def parse_model_data(data: dict, path: Path) -> tuple:
                        if (p := _programme(c, e, f"programme[{k}]", t_end)) is not None)
     all_complete = len(constraints) == len(entries["constraint"]) and \
         len(programmes) == len(entries["programme"])
-    names = [(x.key, x.name) for x in constraints] + \
+    names = [(x.key, row) for x in constraints for row in constraint_rows(x)] + \
         [(p.key, p.name or f"Phi_{p.joint}") for p in programmes]
     _unique(c, names, "name", "constraint")
-    n_constraints = len(entries["constraint"]) + len(entries["programme"])
+    n_constraints = sum(len(constraint_rows(x)) for x in constraints) + len(entries["programme"])
     solver = _solver_section(c, data, n_constraints if all_complete else None)
     initial = _initial_section(c, data)
     tolerances = tuple(t for k, e in enumerate(entries["tolerance"])
@@ -306,7 +311,8 @@ def parse_model_data(data: dict, path: Path) -> tuple:
                          if (x := _engine_step(c, e, f"engine_step[{k}]", t_end)) is not None)
     _unique(c, [(f"engine_step[{k}]", x.engine) for k, x in enumerate(engine_steps)],
             "engine", "engine_step")
-    mf = ModelFile(path=path, model=model, chain=chain, flexible=flexible, joints=joints,
+    mf = ModelFile(path=path, model=model, chain=chain, tree=tree, flexible=flexible,
+                   joints=joints,
                    drives=drives, constraints=constraints, programmes=programmes,
                    solver=solver, initial=initial, run=run, tolerances=tolerances,
                    engine_steps=engine_steps)
@@ -498,6 +504,19 @@ def _chain_section(c: _Checker, data: dict, is_builtin: bool) -> Optional[ChainS
     return ChainSection(root, tip, frozen)
 
 
+def _tree_section(c: _Checker, data: dict, is_builtin: bool) -> Optional[TreeSection]:
+    t = c.table(data, "tree", "")
+    if t is None:
+        return None
+    if is_builtin:
+        c.add("tree", "only for urdf models (a builtin model is a chain already)")
+        return None
+    c.keys(t, ("root", "frozen"), "tree")
+    root = c.string(t, "root", "tree", "the URDF link the tree hangs from", required=False)
+    frozen = c.number_map(t, "frozen", "tree", "rad or m")
+    return TreeSection(root, frozen)
+
+
 def _flexible(c: _Checker, e: dict, path: str, is_builtin: bool) -> Optional[FlexibleSpec]:
     c.keys(e, ("link", "section", "youngs_modulus", "shear_modulus", "density", "segments",
                "bending_viscosity", "torsion_viscosity", "axis", "length", "section_y_axis",
@@ -662,6 +681,8 @@ def _constraint(c: _Checker, e: dict, path: str, t_end):
                         choices=CONSTRAINT_KINDS)
         if kind is None:
             return None
+    if kind in PAIR_KINDS or (kind == "expression" and "frames" in e):
+        return _pair_constraint(c, e, path, kind, index, t_end)
     keys = {"expression": ("phi",), "ellipse": ("a", "b", "center"),
             "coordinate": ("axis", "function")}[kind]
     c.keys(e, ("name", "frame", "kind") + keys, path,
@@ -698,6 +719,83 @@ def _constraint(c: _Checker, e: dict, path: str, t_end):
     if len(c.problems) > n0 or fn is None:
         return None
     return CoordinateConstraintSpec(path, name, frame, AXES[axis], fn)
+
+
+_PAIR_KEYS = {"relative": ("axis", "function"), "distance": ("length", "function"),
+              "coincident": ("axes",), "aligned": (), "weld": (), "expression": ("phi",)}
+
+
+def _pair_constraint(c: _Checker, e: dict, path: str, kind: str, index: int,
+                     t_end) -> Optional[PairConstraintSpec]:
+    """A [[constraint]] between two frames (``frames = [a, b]``; PairConstraintSpec)."""
+    keys = _PAIR_KEYS[kind]
+    c.keys(e, ("name", "frames", "kind") + keys, path,
+           hint=f" (kind {kind!r} takes frames = [a, b]"
+                + (f" and {', '.join(keys)})" if keys else ")"))
+    n0 = len(c.problems)
+    name = f"Phi_{index + 1}"
+    if "name" in e:
+        name = c.string(e, "name", path, "the constraint's name (output column)")
+    frames = e.get("frames")
+    if not (isinstance(frames, list) and len(frames) == 2
+            and all(isinstance(f, str) and f for f in frames)):
+        c.add(f"{path}.frames", f"must be two frame names [a, b] (named frames or links of "
+              f"the model), got {_type_name(frames)} {frames!r}")
+        return None
+    if frames[0] == frames[1] and kind != "expression":
+        c.add(f"{path}.frames", f"names frame {frames[0]!r} twice; a constraint between two "
+              "frames needs two different frames")
+    spec = {"key": path, "name": name, "kind": kind, "frames": tuple(frames)}
+    if kind == "expression":
+        expr, problems = ex.parse_expression(e.get("phi"), PAIR_SYMBOLS) if "phi" in e else \
+            (None, ["missing; phi(x_a, y_a, z_a, x_b, y_b, z_b, t) = 0 as a string in the "
+                    "world coordinates of the two frames' origins (m) and t (s), e.g. "
+                    "\"x_b - x_a - 0.4\""])
+        for p in problems:
+            c.add(f"{path}.phi", p)
+        if expr is not None and not ex.depends_on(expr, tuple(PAIR_SYMBOLS)[:6]):
+            c.add(f"{path}.phi", f"{e['phi']!r} depends on t only; a constraint between two "
+                  "frames must involve their coordinates x_a ... z_b")
+        spec.update(phi=expr, text=e.get("phi"))
+    elif kind == "relative":
+        axis = c.string(e, "axis", path, "world axis x, y or z", choices=tuple(AXES))
+        spec["axis"] = AXES.get(axis)
+        spec["function"] = _pair_function(c, e, path, t_end, "the offset of b from a along "
+                                          "the axis", default=0.0)
+    elif kind == "distance":
+        if "length" in e and "function" in e:
+            c.add(path, "give length (a rigid rod, m) or function (a programmed distance), "
+                  "not both")
+        elif "length" in e:
+            length = c.number(e, "length", path, "m, the distance between the origins",
+                              rule=">0")
+            spec["function"] = None if length is None else tfn.Constant(length)
+        else:
+            spec["function"] = _pair_function(c, e, path, t_end, "the distance", default=None)
+    elif kind == "coincident":
+        axes = e.get("axes", "xyz")
+        if not (isinstance(axes, str) and axes and set(axes) <= set(AXES)
+                and len(set(axes)) == len(axes)):
+            c.add(f"{path}.axes", f"must be a string of distinct world axes among x, y, z "
+                  f"(e.g. \"xy\" for a planar loop), got {axes!r}")
+        else:
+            spec["axes"] = axes
+    if len(c.problems) > n0:
+        return None
+    return PairConstraintSpec(**spec)
+
+
+def _pair_function(c: _Checker, e: dict, path: str, t_end, what: str, default):
+    """The TimeFunction of a pair constraint's ``function`` table (m), or Constant(default)
+    when absent and a default exists (else a problem)."""
+    if "function" not in e:
+        if default is None:
+            c.add(f"{path}.function", f"missing; {what} as a function of time "
+                  "{type = ..., parameters in m} (or length = ... for a rigid rod)")
+            return None
+        return tfn.Constant(default)
+    table = c.table(e, "function", path, required=True)
+    return None if table is None else _time_function(c, table, f"{path}.function", "m", t_end)
 
 
 def _programme(c: _Checker, e: dict, path: str, t_end) -> Optional[ProgrammeSpec]:

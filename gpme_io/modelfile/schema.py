@@ -20,11 +20,16 @@ BUILTIN_MODELS = ("crane",)
 SECTION_SHAPES = {"circle": ("diameter",), "tube": ("outer_diameter", "wall_thickness"),
                   "rectangle": ("width_y", "height_z"),
                   "hollow_rectangle": ("width_y", "height_z", "wall_thickness")}
-CONSTRAINT_KINDS = ("expression", "ellipse", "coordinate")
+CONSTRAINT_KINDS = ("expression", "ellipse", "coordinate", "relative", "distance",
+                    "coincident", "aligned", "weld")
+# kinds between two frames (gpme_core.pair_constraints), with the rows each makes
+PAIR_KINDS = ("relative", "distance", "coincident", "aligned", "weld")
 AXES = {"x": 0, "y": 1, "z": 2}
 # units of the symbols of each kind of expression
 POINT_SYMBOLS = {"x": "m", "y": "m", "z": "m", "t": "s"}
 TIME_SYMBOLS = {"t": "s"}
+PAIR_SYMBOLS = {"x_a": "m", "y_a": "m", "z_a": "m", "x_b": "m", "y_b": "m", "z_b": "m",
+                "t": "s"}
 
 
 def _frozen_map(obj, name):
@@ -69,6 +74,19 @@ class ChainSection:
 
     root: Optional[str] = None
     tip: Optional[str] = None
+    frozen: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self):
+        _frozen_map(self, "frozen")
+
+
+@dataclass(frozen=True)
+class TreeSection:
+    """[tree]: every moving joint of the URDF below link ``root`` (None: the URDF root) is a
+    coordinate (a tree whose branches all move), except the joints held at ``frozen``
+    {joint: rad or m}."""
+
+    root: Optional[str] = None
     frozen: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
@@ -170,7 +188,54 @@ class CoordinateConstraintSpec:
     function: TimeFunction
 
 
-ConstraintSpec = Union[ExpressionConstraintSpec, EllipseConstraintSpec, CoordinateConstraintSpec]
+@dataclass(frozen=True)
+class PairConstraintSpec:
+    """[[constraint]] between two frames ``frames`` = (a, b) (gpme_core.pair_constraints):
+
+    kind "relative"  : world coordinate ``axis`` (0 x, 1 y, 2 z) of b's origin relative to
+                       a's follows ``function`` (m)
+    kind "distance"  : |p_b - p_a| follows ``function`` (m)
+    kind "coincident": the origins coincide along ``axes`` (a string of x, y, z)
+    kind "aligned"   : b has a's orientation (3 rows)
+    kind "weld"      : coincident and aligned (6 rows)
+    kind "expression": phi(x_a, y_a, z_a, x_b, y_b, z_b, t) = ``phi`` (m and s)
+    """
+
+    key: str
+    name: str
+    kind: str
+    frames: tuple
+    axis: Optional[int] = None
+    axes: str = "xyz"
+    function: Optional[TimeFunction] = None
+    phi: Optional[sp.Expr] = None
+    text: Optional[str] = None
+
+    @property
+    def row_names(self) -> tuple:
+        """The names of the constraint rows this entry makes (output columns)."""
+        if self.kind == "coincident":
+            return tuple(f"{self.name}_{a}" for a in self.axes)
+        rotations = tuple(f"{self.name}_r{a}" for a in "xyz")
+        if self.kind == "aligned":
+            return rotations
+        if self.kind == "weld":
+            return tuple(f"{self.name}_{a}" for a in "xyz") + rotations
+        return (self.name,)
+
+
+ConstraintSpec = Union[ExpressionConstraintSpec, EllipseConstraintSpec, CoordinateConstraintSpec,
+                       PairConstraintSpec]
+
+
+def constraint_frames(c) -> tuple:
+    """The frames a [[constraint]] entry names: (frame,) or (a, b)."""
+    return tuple(c.frames) if isinstance(c, PairConstraintSpec) else (c.frame,)
+
+
+def constraint_rows(c) -> tuple:
+    """The row names of a [[constraint]] entry (one for a point constraint)."""
+    return c.row_names if isinstance(c, PairConstraintSpec) else (c.name,)
 
 
 @dataclass(frozen=True)
@@ -227,6 +292,7 @@ class ModelFile:
     path: Path
     model: Optional[ModelSection]
     chain: Optional[ChainSection] = None
+    tree: Optional[TreeSection] = None
     flexible: tuple = ()
     joints: tuple = ()
     drives: tuple = ()
@@ -240,7 +306,8 @@ class ModelFile:
 
     @property
     def n_constraints(self) -> int:
-        return len(self.constraints) + len(self.programmes)
+        """Constraint rows: a [[constraint]] between two frames may make several."""
+        return sum(len(constraint_rows(c)) for c in self.constraints) + len(self.programmes)
 
     def tolerance_map(self) -> Mapping[str, ToleranceOverride]:
         return {t.check: t for t in self.tolerances}
