@@ -18,8 +18,17 @@ parameters); only the derivatives are computed here.
 
 A joint programme q_k = f(t) gives Phi = q_k - f, A = e_k, kappa = -f''(t), f'' from SymPy.
 
+A constraint between two frames (gpme_core.pair_constraints) is derived the same way as a
+function of several points, each the origin of a named frame: the two frames' origins
+for a relative coordinate, a distance or an expression in x_a ... z_b, and for an axis
+alignment (R_a e_i) . (R_b e_j) four points, each frame's origin and the point one metre
+along the axis (``axis_frame_name``: a frame the engines are given for it by
+:func:`with_reference_frames`), the axis being their difference.  Nothing of gpme's row
+formula (stacked Jacobians, the direction kinematics) is used.
+
 Frames and units: p, v, a in the world frame (m, m/s, m/s^2); J (3, n) m or m/rad.
 """
+import dataclasses
 from dataclasses import dataclass, fields
 from typing import Callable, Optional
 
@@ -29,7 +38,11 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
 from gpme_core import constraints as gc
+from gpme_core.gpme import ProgrammedMotion
+from gpme_core import pair_constraints as pc
 from gpme_core import time_functions as tfn
+from gpme_core import transforms as tf
+from gpme_core.model import Frame, Model
 
 T = sp.Symbol("t", real=True)
 XYZ = sp.symbols("x y z", real=True)
@@ -147,11 +160,147 @@ class ReferenceJointProgramme:
         return float(q[self.index] - f), float(q_dot[self.index] - f_dot), row, -f_ddot
 
 
+def axis_frame_name(frame: str, axis: int) -> str:
+    """Name of the auxiliary frame one metre along axis ``axis`` (0 x, 1 y, 2 z) of
+    ``frame``: its origin minus the frame's origin is that axis in the world frame."""
+    return f"{frame}@{'xyz'[axis]}"
+
+
+def reference_frames(specs) -> dict:
+    """{auxiliary frame name: (frame, axis)} the axis alignments of ``specs`` need."""
+    out = {}
+    for spec in specs:
+        if isinstance(spec, pc.AxisAlignment):
+            for frame, axis in ((spec.frame_a, spec.axis_a), (spec.frame_b, spec.axis_b)):
+                out[axis_frame_name(frame, axis)] = (frame, axis)
+    return out
+
+
+def with_reference_frames(model: Model, specs) -> Model:
+    """``model`` with the auxiliary frames of :func:`reference_frames` added (the same
+    model when there are none).  Frames do not change the dynamics; the engines' models
+    built from it then carry them as named frames, sites or markers."""
+    extra = {name: (frame, axis) for name, (frame, axis) in reference_frames(specs).items()
+             if name not in model.frames}
+    if not extra:
+        return model
+    frames = dict(model.frames)
+    for name, (frame, axis) in extra.items():
+        base = model.frame(frame)
+        offset = tf.translation(*np.eye(3)[axis])
+        frames[name] = Frame(name, base.link_index, base.transform @ offset)
+    return Model(model.joints, model.links, frames, model.drives, model.gravity,
+                 model.flexible_links, model.name, model.geometry)
+
+
+def with_reference_frames_of(scenario):
+    """``scenario`` (gpme_io.scenario.Scenario) with its model given the auxiliary frames
+    of its constraints (:func:`with_reference_frames`): the same object when none are
+    needed; else a copy whose model and system (same constraints, dependent coordinates
+    and Baumgarte rates) have them."""
+    model = with_reference_frames(scenario.model, scenario.constraints)
+    if model is scenario.model:
+        return scenario
+    system = scenario.system
+    copy = ProgrammedMotion(model, system.constraint_specs, dependent=system.dependent,
+                            baumgarte=(system.alpha, system.beta),
+                            damping_form=system.damping_form)
+    return dataclasses.replace(scenario, model=model, system=copy)
+
+
+def pair_expression(spec) -> tuple:
+    """(frames, phi) of a pair constraint: phi in the coordinates (XYZ-like symbols, 3 per
+    frame, :func:`point_symbols`) of the origins of ``frames``, rebuilt from the spec's
+    parameters."""
+    if isinstance(spec, pc.AxisAlignment):
+        frames = (spec.frame_a, axis_frame_name(spec.frame_a, spec.axis_a),
+                  spec.frame_b, axis_frame_name(spec.frame_b, spec.axis_b))
+    else:
+        frames = (spec.frame_a, spec.frame_b)
+    pts = point_symbols(len(frames))
+    f = None if isinstance(spec, pc.SympyPairConstraint) else time_expression(spec.function)
+    if f is None and not isinstance(spec, pc.SympyPairConstraint):
+        raise TypeError(f"constraint {spec.name!r}: no closed form for {spec.function!r}")
+    if isinstance(spec, pc.SympyPairConstraint):
+        names = pc.PAIR_SYMBOL_NAMES
+        sym = {sp.Symbol(n): s for n, s in zip(names, (*pts[0], *pts[1], T))}
+        expr = sp.sympify(spec.expr).subs(sym)
+    elif isinstance(spec, pc.RelativeCoordinate):
+        expr = pts[1][spec.axis] - pts[0][spec.axis] - f
+    elif isinstance(spec, pc.Distance):
+        expr = sp.sqrt(sum((pts[1][i] - pts[0][i]) ** 2 for i in range(3))) - f
+    elif isinstance(spec, pc.AxisAlignment):
+        expr = sum((pts[1][i] - pts[0][i]) * (pts[3][i] - pts[2][i]) for i in range(3)) - f
+    else:
+        raise TypeError(f"constraint {spec.name!r}: no reference derivation for "
+                        f"{type(spec).__name__}")
+    return frames, expr
+
+
+def point_symbols(k: int) -> list:
+    """[(x_k, y_k, z_k)] real symbols of k points (m, world frame)."""
+    return [sp.symbols(f"px{i} py{i} pz{i}", real=True) for i in range(k)]
+
+
+@dataclass(frozen=True)
+class ReferenceFramesConstraint:
+    """phi(p_0, ..., p_{k-1}, t) = 0 on the origins of the model frames ``frames``, derived
+    independently as ReferencePointConstraint is, with the points' coordinates as functions
+    of time.  evaluate(t, states) with states [(p, v, J, drift)] per frame."""
+
+    name: str
+    frames: tuple
+    expression: sp.Expr
+    _f: Callable
+
+    @classmethod
+    def from_spec(cls, spec):
+        frames, expression = pair_expression(spec)
+        pts = point_symbols(len(frames))
+        coords = [c for p in pts for c in p]
+        funcs = [sp.Function(f"P{i}", real=True)(T) for i in range(len(coords))]
+        vel = sp.symbols(f"v0:{len(coords)}", real=True)
+        acc = sp.symbols(f"a0:{len(coords)}", real=True)
+        composite = expression.subs(dict(zip(coords, funcs)))
+        first = sp.diff(composite, T)
+        second = sp.diff(first, T)
+        subs2 = {sp.diff(g, T, 2): a for g, a in zip(funcs, acc)}
+        subs1 = {sp.diff(g, T): v for g, v in zip(funcs, vel)}
+        back = dict(zip(funcs, coords))
+        phi_dot = first.subs(subs1).subs(back)
+        phi_ddot = second.subs(subs2).subs(subs1).subs(back)
+        grad_v = [sp.diff(phi_dot, v) for v in vel]
+        f = sp.lambdify((*coords, T, *vel, *acc), [expression, phi_dot, grad_v, phi_ddot],
+                        "numpy")
+        return cls(spec.name, frames, expression, f)
+
+    def evaluate(self, t: float, states):
+        p = np.concatenate([s[0] for s in states])
+        v = np.concatenate([s[1] for s in states])
+        jac = np.vstack([s[2] for s in states])
+        drift = np.concatenate([s[3] for s in states])
+        phi, phi_dot, grad_v, kappa = self._f(*p, t, *v, *drift)
+        row = np.asarray(grad_v, dtype=float) @ jac
+        return float(phi), float(phi_dot), row, float(kappa)
+
+
+def reference_frame_names(refs) -> list:
+    """Every frame whose point state the reference constraints ``refs`` ask for."""
+    out = []
+    for r in refs:
+        for f in getattr(r, "frames", None) or ((r.frame,) if hasattr(r, "frame") else ()):
+            if f not in out:
+                out.append(f)
+    return out
+
+
 def reference_constraints(specs, coordinate_names):
     """The reference form of each gpme constraint spec (same order and names)."""
     out = []
     for spec in specs:
-        if isinstance(spec, gc.JointProgramme):
+        if isinstance(spec, pc.PairConstraint):
+            out.append(ReferenceFramesConstraint.from_spec(spec))
+        elif isinstance(spec, gc.JointProgramme):
             out.append(ReferenceJointProgramme(spec.name, spec.coordinate,
                                                list(coordinate_names).index(spec.coordinate),
                                                _time_derivatives(spec.function)))
@@ -173,6 +322,9 @@ def evaluate_reference(refs, t, q, q_dot, point_state):
     for k, r in enumerate(refs):
         if isinstance(r, ReferenceJointProgramme):
             phi[k], phi_dot[k], a[k], kappa[k] = r.evaluate(t, q, q_dot, n)
+        elif isinstance(r, ReferenceFramesConstraint):
+            phi[k], phi_dot[k], a[k], kappa[k] = r.evaluate(t, [point_state(f)
+                                                                for f in r.frames])
         else:
             phi[k], phi_dot[k], a[k], kappa[k] = r.evaluate(t, *point_state(r.frame))
     return phi, phi_dot, a, kappa

@@ -41,6 +41,7 @@ from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
 
 from .accurate_step import run_accurately
 from .compare import CRASH_QUANTITY, Tolerance, compare
+from .constraint_reference import with_reference_frames_of
 from .crane_cases import crane_cases
 from .engines import missing_message
 from . import run_store
@@ -246,6 +247,9 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                 write_rows(normalise(tables[step]), staging, step)
             else:
                 chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
+                # the engines' models carry the auxiliary frames of the reference
+                # derivation of axis alignments (crosscheck.constraint_reference)
+                chosen = [with_reference_frames_of(s) for s in chosen]
                 table = _engine_step(step, staging, chosen, quick, progress)
                 # checks of gpme's own runs made on the way (its observed order) are gpme's
                 prerequisites.append(other_rows(table, step))

@@ -33,7 +33,8 @@ from gpme_core.errors import SimulationError
 from gpme_core.gpme import ProgrammedMotion
 
 from ..run_gates import phi_term_scale
-from ..constraint_reference import evaluate_reference, reference_constraints
+from ..constraint_reference import (evaluate_reference, reference_constraints,
+                                   reference_frame_names)
 from .mjcf import mjcf_text
 from .sim import _unstable, chain_map, set_state
 
@@ -53,8 +54,8 @@ class _ConstraintForces:
         self.refs = reference_constraints(scenario.constraints, model.coordinate_names)
         self.alpha, self.beta = scenario.system.alpha, scenario.system.beta
         nv = mj_model.nv
-        self.sites = {r.frame: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, r.frame)
-                      for r in self.refs if hasattr(r, "frame")}
+        self.sites = {f: mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_SITE, f)
+                      for f in reference_frame_names(self.refs)}
         missing = [f for f, s in self.sites.items() if s < 0]
         if missing:
             raise SimulationError(f"MuJoCo model has no sites {missing}")

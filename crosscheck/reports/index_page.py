@@ -230,7 +230,7 @@ def _models(record):
     out = []
     for m in record:
         items = [("source", m["source"]), ("URDF", m["urdf"] or "-"),
-                 ("chain (root, tip)", " -> ".join(m["chain"]) if m["chain"] else "-"),
+                 ("chain (root, tip)", _chain_text(m["chain"])),
                  ("coordinates", m["coordinates"]),
                  ("frozen joints", ", ".join(f"{k} = {v:g}" for k, v in m["frozen"].items())
                   or "none"),
@@ -304,3 +304,13 @@ def write_index(run_dir, summary, rows, meta, models=(), diff=None, names=None):
                   files=_files(run_dir), meta_items=_meta_items(meta),
                   benchmarks=_benchmarks(run_dir.parent / "benchmarks"))
     atomic_write_text(run_dir / "index.html", page)
+
+
+def _chain_text(chain) -> str:
+    """'root -> tip' of a chain read from a URDF, 'whole tree below root' of a tree (tip
+    None), '-' for a model built in code."""
+    if not chain:
+        return "-"
+    if len(chain) < 2 or chain[1] is None:
+        return f"whole tree below {chain[0]}"
+    return " -> ".join(chain)

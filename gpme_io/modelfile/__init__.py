@@ -26,7 +26,7 @@ __all__ = ["load_model_file", "load_model_files", "read_model_file", "build_scen
            "ModelFile"]
 
 # problems in these sections leave the source model unbuildable or incomplete
-_SOURCE_KEYS = ("model", "chain", "flexible")
+_SOURCE_KEYS = ("model", "chain", "tree", "flexible")
 
 
 def read_model_file(path) -> ModelFile:
