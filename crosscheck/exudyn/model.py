@@ -96,10 +96,13 @@ class TreeLayout:
 
 
 def tree_layout(model) -> TreeLayout:
-    """:class:`TreeLayout` of the gpme ``model`` (a serial chain: parent of k is k - 1)."""
+    """:class:`TreeLayout` of the gpme ``model`` (a chain or a tree: the parent of joint k
+    is ``model.parents[k]``, -1 the world, as Exudyn's linkParents)."""
     types, idx, rots, jr, jo, masses, coms, inertias, unaligned = [], [], [], [], [], [], [], [], []
-    x_parent = np.eye(3)
-    for joint, link in zip(model.joints, model.links):
+    for k, (joint, link) in enumerate(zip(model.joints, model.links)):
+        parent = int(model.parents[k])
+        # X_parent: the parent link frame in the parent's joint frame (R_a^T of its axis)
+        x_parent = np.eye(3) if parent < 0 else rots[parent].T
         c, r_a = axis_rotation(joint.axis)
         if joint.kind not in ("revolute", "prismatic"):
             raise ModelError(f"joint {joint.name!r}: kind {joint.kind!r}; Exudyn's tree takes "
@@ -120,7 +123,6 @@ def tree_layout(model) -> TreeLayout:
             masses.append(float(link.inertia.mass))
             coms.append(r_a.T @ link.inertia.com_array)
             inertias.append(r_a.T @ link.inertia.inertia_array @ r_a)
-        x_parent = r_a.T
     arr = lambda v: np.array(v, dtype=float)
     return TreeLayout(tuple(types), np.array(idx, dtype=int), arr(rots), arr(jr), arr(jo),
                       arr(masses), arr(coms), arr(inertias), tuple(unaligned))
@@ -179,7 +181,8 @@ def add_tree(mbs, model, q0, q_dot0, damping_form: str = "lagrange") -> ExudynTr
                                        initialCoordinates_t=q_dot0.tolist(),
                                        numberOfODE2Coordinates=n))
     tree = mbs.AddObject(ObjectKinematicTree(
-        nodeNumber=node, jointTypes=list(lay.joint_types), linkParents=list(range(-1, n - 1)),
+        nodeNumber=node, jointTypes=list(lay.joint_types),
+        linkParents=[int(p) for p in model.parents],
         jointTransformations=exu.Matrix3DList(list(lay.joint_rotations)),
         jointOffsets=exu.Vector3DList(list(lay.joint_offsets)),
         linkInertiasCOM=exu.Matrix3DList(list(lay.link_inertias)),

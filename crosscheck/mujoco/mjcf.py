@@ -107,9 +107,12 @@ def body_groups(model):
     """List of joint-index lists, one per MuJoCo body (see the module docstring).
 
     Consecutive joints share a body when the links between them are massless, carry no
-    frame and the next origin is the identity (an RFEM element's three rotations).  Any
-    other massless link gets its own body with the bounded mass of :func:`bounded_inertia`."""
+    frame, carry only the next joint (no branch of a tree starts there) and the next
+    origin is the identity (an RFEM element's three rotations).  Any other massless link
+    gets its own body with the bounded mass of :func:`bounded_inertia`."""
     frame_links = {fr.link_index for fr in model.frames.values()}
+    children = np.bincount(model.parents[model.parents >= 0],
+                           minlength=model.n_coordinates)
     groups = []
     current = []
     for k, joint in enumerate(model.joints):
@@ -118,6 +121,7 @@ def body_groups(model):
         last = k == model.n_coordinates - 1
         massless = link.inertia is None
         can_merge = (massless and not last and k not in frame_links
+                     and model.parents[k + 1] == k and children[k] == 1
                      and np.array_equal(model.joints[k + 1].origin, np.eye(4)))
         if can_merge:
             continue
@@ -261,7 +265,8 @@ def _shape_geom(body, shape, meshes):
 
 
 def _chain(worldbody, model, meshes=None):
-    """Nested <body> elements of the chain (see the module docstring) under ``worldbody``;
+    """Nested <body> elements of the chain or tree (see the module docstring) under
+    ``worldbody``, each body inside the body of its parent link;
     ``meshes`` collects {(file, scale): asset name} of the mesh geoms."""
     meshes = {} if meshes is None else meshes
     shapes_by_link = {}
@@ -270,10 +275,11 @@ def _chain(worldbody, model, meshes=None):
     frames_by_link = {}
     for name, fr in model.frames.items():
         frames_by_link.setdefault(fr.link_index, []).append((name, fr))
-    parent = worldbody
+    bodies = {}                     # link index -> the <body> that ends at that link
     for group in body_groups(model):
         last = group[-1]
         link = model.links[last]
+        parent = bodies.get(int(model.parents[group[0]]), worldbody)
         body = ET.SubElement(parent, "body", name=link.name,
                              **_pose_attributes(model.joints[group[0]].origin))
         for k in group:
@@ -298,7 +304,7 @@ def _chain(worldbody, model, meshes=None):
         for name, fr in sorted(frames_by_link.get(last, [])):
             ET.SubElement(body, "site", name=name, **_pose_attributes(fr.transform),
                           size="0.02", rgba="1 0.2 0.2 1")
-        parent = body
+        bodies[last] = body
 
 
 def _light_inertial(body, settings):
