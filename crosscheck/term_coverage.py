@@ -49,8 +49,10 @@ from gpme_core.constraints import (CoordinateProgramme, EllipseConstraint, Joint
 from gpme_core.dynamics import dynamics_terms
 from gpme_core.errors import ModelError
 from gpme_core.integrate import simulate
-from gpme_core.kinematics import point_kinematics
+from gpme_core.kinematics import point_kinematics, vector_kinematics
 from gpme_core.model import PRISMATIC, REVOLUTE
+from gpme_core.pair_constraints import (AxisAlignment, Distance, RelativeCoordinate,
+                                        SympyPairConstraint)
 from gpme_core.rfem import BeamSection
 
 from .crane_cases import crane_cases
@@ -75,11 +77,21 @@ ZERO, WEAK, EXERCISED, ABSENT = "zero", "weak", "exercised", "absent"
 
 # constraint kinds, as gpme_core.constraints offers them (model file: [[constraint]] kind
 # "expression", "ellipse", "coordinate"; [[programme]])
-EXPRESSION, ELLIPSE, COORDINATE, JOINT_PROGRAMME = (
-    "expression", "ellipse", "coordinate", "joint programme")
+EXPRESSION, ELLIPSE, COORDINATE, JOINT_PROGRAMME, TWO_FRAME = (
+    "expression", "ellipse", "coordinate", "joint programme", "two-frame")
+# Constraints between two frames (gpme_core.pair_constraints: relative, distance, axis
+# alignment, expression) share one row assembly from their stacked vectors (kernels
+# _pair_row, pair_constraints._BoundPairConstraint), whose pieces are counted together as
+# the kind "two-frame"; each kind's local terms are checked on their own against finite
+# differences and between the computation paths (tests/test_pair_constraints.py,
+# tests/test_compiled.py), whatever the examples exercise.
 CONSTRAINT_KINDS = MappingProxyType({
     SympyPointConstraint: EXPRESSION, EllipseConstraint: ELLIPSE,
-    CoordinateProgramme: COORDINATE, JointProgramme: JOINT_PROGRAMME})
+    CoordinateProgramme: COORDINATE, JointProgramme: JOINT_PROGRAMME,
+    RelativeCoordinate: TWO_FRAME, Distance: TWO_FRAME, AxisAlignment: TWO_FRAME,
+    SympyPairConstraint: TWO_FRAME})
+KINDS = tuple(dict.fromkeys(CONSTRAINT_KINDS.values()))
+"""The constraint kinds of the table, each once, in order."""
 
 # the pieces of a constraint: its value, its Jacobian row, Phi_t (Phi_dot = A q_dot +
 # Phi_t) and the four pieces of kappa
@@ -98,6 +110,7 @@ STRUCTURALLY_ZERO = MappingProxyType({
     ELLIPSE: frozenset({PHI_T, GRAD_T, PHI_TT}),
     COORDINATE: frozenset({HESS, GRAD_T}),
     JOINT_PROGRAMME: frozenset({DRIFT, HESS, GRAD_T}),
+    TWO_FRAME: frozenset(),
 })
 # Phi is not required: a run that starts on its constraints (on_constraints = true, as
 # every example but the paper's crane) keeps Phi at round-off by design.  Its value off
@@ -191,7 +204,7 @@ def _terms():
     for kind in JOINT_KINDS:
         out.append(Term(f"joint {kind}", f"{kind} joints: max abs(q_dot)",
                         "rad/s" if kind == REVOLUTE else "m/s", "speed"))
-    for kind in CONSTRAINT_KINDS.values():
+    for kind in KINDS:
         for piece in PIECES:
             if piece not in STRUCTURALLY_ZERO[kind]:
                 out.append(Term(constraint_term_key(kind, piece), _piece_label(kind, piece),
@@ -373,15 +386,19 @@ def constraint_pieces(model, spec, bound, t: float, kin, q: NDArray[np.float64],
         return {PHI: q[k] - f, ROW: row, _A_QDOT: float(q_dot[k]), PHI_T: -f_t,
                 DRIFT: 0.0, HESS: 0.0, GRAD_T: 0.0, PHI_TT: -f_tt,
                 _PHI_DOT_BOUND: abs(q_dot[k]) + abs(f_t), _KAPPA_BOUND: abs(f_tt)}
-    pk = point_kinematics(model, kin, q_dot, bound.link, bound.r_local)
-    phi, grad, hess, phi_t, grad_t, phi_tt = spec.local_terms(pk.position, t)
-    v = pk.velocity
+    if getattr(bound, "vector_keys", None) is not None:      # two frames: stacked (6,)
+        position, v, jacobian, drift = bound.stacked(
+            [vector_kinematics(model, kin, q_dot, *key) for key in bound.vector_keys])
+    else:
+        pk = point_kinematics(model, kin, q_dot, bound.link, bound.r_local)
+        position, v, jacobian, drift = pk.position, pk.velocity, pk.jacobian, pk.drift
+    phi, grad, hess, phi_t, grad_t, phi_tt = spec.local_terms(position, t)
     speed, slope = float(np.linalg.norm(v)), float(np.linalg.norm(grad))
-    return {PHI: float(phi), ROW: grad @ pk.jacobian, _A_QDOT: float(grad @ v),
-            PHI_T: float(phi_t), DRIFT: float(grad @ pk.drift), HESS: float(v @ hess @ v),
+    return {PHI: float(phi), ROW: grad @ jacobian, _A_QDOT: float(grad @ v),
+            PHI_T: float(phi_t), DRIFT: float(grad @ drift), HESS: float(v @ hess @ v),
             GRAD_T: 2.0 * float(grad_t @ v), PHI_TT: float(phi_tt),
             _PHI_DOT_BOUND: slope * speed + abs(phi_t),
-            _KAPPA_BOUND: (slope * float(np.linalg.norm(pk.drift))
+            _KAPPA_BOUND: (slope * float(np.linalg.norm(drift))
                            + speed ** 2 * float(np.linalg.norm(hess, 2))
                            + 2.0 * float(np.linalg.norm(grad_t)) * speed + abs(phi_tt))}
 
@@ -612,7 +629,7 @@ def page_text(coverages: Sequence[ExampleCoverage], command: str) -> str:
     scales = "\n".join(f"- `{k}`: {v}." for k, v in SCALES.items())
     structural = "\n".join(
         f"- {kind}: " + (", ".join(sorted(STRUCTURALLY_ZERO[kind])) or "none")
-        for kind in CONSTRAINT_KINDS.values())
+        for kind in KINDS)
     return f"""# Term coverage of the shipped examples
 
 <!-- generated by `{command}`; edit crosscheck/term_coverage.py, not this page -->

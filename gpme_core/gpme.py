@@ -317,6 +317,7 @@ class ProgrammedMotion:
         for it in range(max_iter):
             phi, _, a, _ = self.constraints(t, q, q_dot)
             if np.max(np.abs(phi)) < tol:
+                q = self._polished(t, q, q_dot, phi, a)
                 break
             _, inv_dc = self.velocity_map(a, t, q)
             q[self.dc] -= inv_dc @ phi
@@ -339,6 +340,20 @@ class ProgrammedMotion:
         phi_t = phi_dot - a @ q_dot
         q_dot[self.dc] = gamma @ q_dot[self.ic] - inv_dc @ phi_t
         return q, q_dot
+
+
+    def _polished(self, t, q, q_dot, phi, a):
+        """q after one more Newton step on Phi = 0 (phi (m,), a (m, n) at q): Newton's
+        quadratic convergence takes a residual below the tolerance down to round-off, so
+        that a start is on its constraints to round-off, as the crosschecks' Phi gates
+        assume; kept only when it does not make max |Phi| larger."""
+        _, inv_dc = self.velocity_map(a, t, q)
+        trial = q.copy()
+        trial[self.dc] -= inv_dc @ phi
+        if not np.all(np.isfinite(trial)):
+            return q
+        after = self.constraints(t, trial, q_dot)[0]
+        return trial if np.max(np.abs(after)) <= np.max(np.abs(phi)) else q
 
 
 def _singular_partition(names, rcond, t, q, a=None, constraint_names=None):
