@@ -112,6 +112,10 @@ def pack(system):
     """(md, cd, UserCode) of ``system`` for gpme_core.kernels (layout in its docstring);
     NotCompilable names the first part that cannot be compiled."""
     model = system.model
+    if model.point_springs:
+        raise NotCompilable(f"the model has point springs "
+                            f"{[s.name for s in model.point_springs]}, which the compiled "
+                            "kernels do not evaluate yet (gpme_core.point_springs)")
     tables = _Tables()
     m = system.n_constraints
     c_kind = np.zeros(m, dtype=np.int64)

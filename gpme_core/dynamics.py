@@ -8,6 +8,7 @@ Equation of motion (Lagrange's equations of the second kind), paper's sign conve
     h_i  = -sum_l sum_j sum_k tr(T_i^(l) H^(l) T_jk^(l)T) q_dot_j q_dot_k  (velocity products)
     g_i  = dE_p,g / dq_i,  E_p,g = -sum_l gamma^T T^(l) H^(l) e_4,  gamma = (gravity, 0)
     f    = K (q - q_ref)   (springs),  d = D q_dot  (dampers: d = dR/dq_dot),
+           plus the point springs' elastic and damping forces (gpme_core.point_springs),
     t    = drive forces.
 
 All sums over l run over the links that both i and j move only (tree structure,
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import fast
+from .point_springs import point_spring_energy, point_spring_forces
 from .kinematics import (ChainKinematics, chain_kinematics, twist_velocities,
                          velocity_product_accelerations)
 
@@ -88,9 +90,10 @@ def drive_forces(model, t):
 
 
 def generalized_forces(model, t, q, q_dot):
-    """(n,) Q = -(g + d + f) + t."""
-    return -(gravity_forces(model, q) + damper_forces(model, q_dot) + spring_forces(model, q)) \
-        + drive_forces(model, t)
+    """(n,) Q = -(g + d + f) + t (f and d with the point springs', gpme_core.point_springs)."""
+    f_ps, d_ps = point_spring_forces(model, chain_kinematics(model, q), q_dot)
+    return -(gravity_forces(model, q) + damper_forces(model, q_dot) + spring_forces(model, q)
+             + f_ps + d_ps) + drive_forces(model, t)
 
 
 def kinetic_energy(model, q, q_dot):
@@ -108,9 +111,12 @@ def gravity_potential_energy(model, q):
 
 
 def spring_potential_energy(model, q):
-    """J, 1/2 (q - q_ref)^T K (q - q_ref)."""
+    """J, 1/2 (q - q_ref)^T K (q - q_ref) plus the point springs' 1/2 k (L - L0)^2."""
     dq = np.asarray(q, dtype=float) - model.spring_reference
-    return 0.5 * float(dq @ (model.stiffness * dq))
+    joints = 0.5 * float(dq @ (model.stiffness * dq))
+    if not model.point_springs:
+        return joints
+    return joints + point_spring_energy(model, chain_kinematics(model, q))
 
 
 def potential_energy(model, q):
@@ -158,10 +164,13 @@ def dynamics_terms(model, t, q, q_dot):
         t_all, s_all, m, h, g = fast.run(
             fast.chain_and_terms, model.origins, model.generators, model.is_revolute,
             model.pseudo_inertias, model.gamma, model.parents, model.moves, q, q_dot)
-        return DynamicsTerms(ChainKinematics(q, t_all, s_all, model.moves), m, h, g,
-                             model.stiffness * (q - model.spring_reference),
-                             model.damping * q_dot, model.drive_forces(t))
+        kin = ChainKinematics(q, t_all, s_all, model.moves)
+        f_ps, d_ps = point_spring_forces(model, kin, q_dot)
+        return DynamicsTerms(kin, m, h, g,
+                             model.stiffness * (q - model.spring_reference) + f_ps,
+                             model.damping * q_dot + d_ps, model.drive_forces(t))
     kin = chain_kinematics(model, q)
+    f_ps, d_ps = point_spring_forces(model, kin, q_dot)
     return DynamicsTerms(kin, mass_matrix(model, kin), velocity_product_terms(model, kin, q_dot),
-                         gravity_forces(model, kin), spring_forces(model, q),
-                         damper_forces(model, q_dot), drive_forces(model, t))
+                         gravity_forces(model, kin), spring_forces(model, q) + f_ps,
+                         damper_forces(model, q_dot) + d_ps, drive_forces(model, t))

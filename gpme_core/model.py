@@ -31,6 +31,7 @@ from .dynamics import mass_matrix
 from .errors import InertiaWarning, ModelError
 from .geometry import Shape
 from .inertia import RigidBodyInertia, transform_pseudo_inertia, inertia_from_pseudo
+from .point_springs import PointSpring, check_point_springs
 from .joint_kinds import JOINT_KINDS, PRISMATIC, REVOLUTE  # noqa: F401 (users import them here)
 from .rfem import discretise_beam
 
@@ -153,9 +154,11 @@ class Model:
     """
 
     def __init__(self, joints, links, frames, drives, gravity, flexible_links, name,
-                 geometry=()):
+                 geometry=(), point_springs=()):
         put = self._init_attr
         put("name", name)
+        # gpme_core.point_springs.PointSpring: spring-dampers between points
+        put("point_springs", tuple(point_springs))
         # gpme_core.geometry.Shape records: what the links look like (never dynamics)
         put("geometry", tuple(geometry))
         put("joints", tuple(joints))
@@ -207,7 +210,8 @@ class Model:
     def __reduce__(self):
         # the read-only mapping does not pickle; rebuilt from the parts (e.g. for workers)
         return (Model, (self.joints, self.links, dict(self.frames), self.drives,
-                        tuple(self.gravity), self.flexible_links, self.name, self.geometry))
+                        tuple(self.gravity), self.flexible_links, self.name, self.geometry,
+                        self.point_springs))
 
     # ------------------------------------------------------------------ lookup
     @property
@@ -288,7 +292,8 @@ class Model:
         joints = [Joint(**{**j.__dict__, **joint_changes.get(j.name, {})}) for j in self.joints]
         links = [Link(lk.name, link_inertias.get(lk.name, lk.inertia)) for lk in self.links]
         model = Model(joints, links, self.frames, self.drives, self.gravity,
-                      self.flexible_links, name or self.name, self.geometry)
+                      self.flexible_links, name or self.name, self.geometry,
+                      self.point_springs)
         validate_model(model)
         return model
 
@@ -397,6 +402,7 @@ def validate_model(model):
     g = np.asarray(model.gravity)
     if g.shape != (3,) or not np.all(np.isfinite(g)):
         problems.append(f"gravity must be a finite (3,) vector in m/s^2, got {g.tolist()}")
+    problems += check_point_springs(model.point_springs, model.frames)
     for d in model.drives:
         if d.joint not in seen:
             problems.append(f"drive on {d.joint!r}: no such coordinate; have {sorted(seen)}")
@@ -456,6 +462,7 @@ class ChainBuilder:
         self._pending_origin = np.eye(4)   # offset of the next joint (e.g. a beam tip)
         self._link_pending = {}            # {link: its offset, kept when it stops being newest}
         self._shapes = []                  # gpme_core.geometry.Shape of the links
+        self._point_springs = []           # gpme_core.point_springs.PointSpring
 
     @property
     def n_joints(self):
@@ -536,6 +543,14 @@ class ChainBuilder:
         """A force/torque t(t) on coordinate ``joint``."""
         self._drives.append(Drive(joint, function))
 
+    def add_point_spring(self, name, frame, anchor, stiffness, free_length, damping=0.0):
+        """A spring-damper from the origin of ``frame`` to ``anchor`` (a world point (3,) m
+        or another frame's name): stiffness N/m, free_length m, damping N s/m
+        (gpme_core.point_springs)."""
+        anchor = anchor if isinstance(anchor, str) else tuple(float(v) for v in anchor)
+        self._point_springs.append(PointSpring(name, frame, anchor, float(stiffness),
+                                               float(free_length), float(damping)))
+
     def add_beam(self, name, beam, n_segments, frame=None):
         """Attach an RFEM-discretised beam to the current link (see gpme_core.rfem).
 
@@ -573,6 +588,6 @@ class ChainBuilder:
                 m, c, i_c = inertia_from_pseudo(h)
                 links.append(Link(name, RigidBodyInertia(m, c, i_c)))
         model = Model(self._joints, links, self._frames, self._drives, self.gravity,
-                      self._flex, self.name, self._shapes)
+                      self._flex, self.name, self._shapes, self._point_springs)
         validate_model(model)
         return model

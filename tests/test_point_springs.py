@@ -1,0 +1,86 @@
+"""Spring-dampers between points (gpme_core.point_springs): the generalized forces are the
+gradients of their energy and Rayleigh function, and bad input is refused by name."""
+import numpy as np
+import pytest
+
+from conftest import spatial_tree
+from gpme_core import dynamics as dy
+from gpme_core.errors import ConstraintError, ModelError
+from gpme_core.kinematics import chain_kinematics
+from gpme_core.model import Model, validate_model
+from gpme_core.point_springs import PointSpring, point_spring_energy, spring_state
+
+pytestmark = pytest.mark.both_computation_paths
+
+H = 1e-6      # central differences: truncation ~h^2, round-off ~eps/h: ~1e-9 relative
+
+
+def _with_springs(*springs):
+    tree = spatial_tree()
+    model = Model(tree.joints, tree.links, tree.frames, tree.drives, tree.gravity,
+                  tree.flexible_links, tree.name, tree.geometry, springs)
+    validate_model(model)
+    return model
+
+
+SPRINGS = (PointSpring("between", "E", "F", 300.0, 0.05, 2.0),
+           PointSpring("to_world", "F", (0.3, -0.2, 0.1), 120.0, 0.4, 0.5))
+
+
+def test_elastic_force_is_the_gradient_of_the_spring_energy(rng):
+    model = _with_springs(*SPRINGS)
+    for _ in range(3):
+        q = rng.uniform(-1, 1, model.n_coordinates)
+        f = dy.dynamics_terms(model, 0.0, q, np.zeros_like(q)).f - model.stiffness * (
+            q - model.spring_reference)
+        grad = np.empty_like(q)
+        for i in range(q.size):
+            e = np.zeros_like(q)
+            e[i] = H
+            grad[i] = (point_spring_energy(model, chain_kinematics(model, q + e))
+                       - point_spring_energy(model, chain_kinematics(model, q - e))) / (2 * H)
+        np.testing.assert_allclose(f, grad, rtol=0, atol=1e-7 * max(1.0, np.abs(grad).max()))
+
+
+def test_damping_force_is_the_gradient_of_the_rayleigh_function(rng):
+    model = _with_springs(*SPRINGS)
+    q, q_dot = rng.uniform(-1, 1, model.n_coordinates), rng.uniform(-1, 1, model.n_coordinates)
+    kin = chain_kinematics(model, q)
+
+    def rayleigh(v):
+        return sum(0.5 * s.damping * spring_state(model, s, kin, v)[1] ** 2 for s in SPRINGS)
+
+    d = dy.dynamics_terms(model, 0.0, q, q_dot).d - model.damping * q_dot
+    grad = np.array([(rayleigh(q_dot + H * e) - rayleigh(q_dot - H * e)) / (2 * H)
+                     for e in np.eye(q.size)])
+    np.testing.assert_allclose(d, grad, rtol=0, atol=1e-7 * max(1.0, np.abs(grad).max()))
+
+
+def test_a_spring_is_in_the_potential_energy():
+    model = _with_springs(*SPRINGS)
+    q = np.zeros(model.n_coordinates)
+    bare = _with_springs()
+    extra = dy.spring_potential_energy(model, q) - dy.spring_potential_energy(bare, q)
+    assert extra == pytest.approx(point_spring_energy(model, chain_kinematics(model, q)))
+    assert extra > 0
+
+
+def test_bad_springs_are_refused_by_name():
+    with pytest.raises(ModelError) as info:
+        _with_springs(PointSpring("s", "E", "G", -1.0, 0.1),
+                      PointSpring("s", "E", (0.0, float("nan"), 0.0), 1.0, -0.1, 0.0))
+    text = str(info.value)
+    for words in ("point spring 's': stiffness must be a finite number >= 0",
+                  "no frame named 'G'", "anchor must be a frame name or a finite world point",
+                  "free_length must be", "point spring names must be unique"):
+        assert words in text, words
+
+
+def test_points_that_meet_are_a_clear_error():
+    tree = spatial_tree()
+    q = np.zeros(tree.n_coordinates)
+    fr = tree.frame("E")
+    p = (chain_kinematics(tree, q).T[fr.link_index] @ fr.transform[:, 3])[:3]
+    model = _with_springs(PointSpring("at_E", "E", tuple(p), 10.0, 0.1))
+    with pytest.raises(ConstraintError, match="point spring 'at_E': its points meet"):
+        dy.dynamics_terms(model, 0.0, q, q)
