@@ -14,7 +14,7 @@ Three comparisons, each with its own reference:
 import numpy as np
 import pytest
 
-from andrews_testset import accelerations, loop_values, mass_and_forces, solve
+from benchmarks.andrews_testset import accelerations, loop_values, mass_and_forces, solve
 from gpme_core.dynamics import dynamics_terms
 from gpme_core.integrate import simulate
 from gpme_examples import andrews as A

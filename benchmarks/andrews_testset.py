@@ -1,7 +1,7 @@
 """The test set's own equations of Andrews' squeezing mechanism, written from its
 formulas (Test Set for IVP Solvers, problem "andrews": mass matrix, forces and the six
 loop equations in the angles beta, Theta, gamma, Phi, delta, Omega, epsilon) with no gpme
-code: the independent side of tests/test_andrews.py.  Parameters and order from
+code: the independent side of tests/test_andrews.py and benchmarks/closed_loops.py.  Parameters and order from
 gpme_examples.andrews (numbers only)."""
 import numpy as np
 import sympy as sp
