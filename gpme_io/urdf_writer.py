@@ -1,11 +1,12 @@
 """Write a gpme model as URDF plus the gpme side file.
 
-:func:`write_urdf` maps a serial-chain :class:`gpme_core.model.Model` to URDF one to one
+:func:`write_urdf` maps a :class:`gpme_core.model.Model` (a chain or a tree) to URDF one to one
 (docs/urdf.md has the full table):
 
 * world            -> root link ``world`` (no inertial; MuJoCo makes it its worldbody);
 * joint k          -> a ``revolute`` or ``prismatic`` joint named after coordinate k,
-                      parent = link k-1 (``world`` for k = 0), child = link k,
+                      parent = the link of its parent joint (``world`` for a root;
+                      link k-1 in a serial chain), child = link k,
                       <origin> = ``Joint.origin`` (xyz m, rpy rad), <axis> = ``Joint.axis``,
                       <dynamics damping> = ``Joint.damping``, <limit lower upper> =
                       ``Joint.limits`` with an infinite end written as -+UNLIMITED (URDF
