@@ -223,6 +223,15 @@ class SympyPairConstraint(PairConstraint):
     def describe(self):
         return f"phi = {self.expr} on frames {self.frame_a!r} (a) and {self.frame_b!r} (b)"
 
+    def terms_along(self, points, times) -> np.ndarray:
+        """(k, 51) local terms (phi, grad (6), Hessian (6x6), phi_t, grad_t (6), phi_tt) at
+        k stacked origins (k, 6) m (frame a's x, y, z, then b's) and times (k,) s, by
+        numpy at once; NaN where a term is not finite (gpme_core.smoothness reads a run's
+        samples with it)."""
+        pts = np.asarray(points, dtype=float)
+        return checks.evaluate_along(self._careful, [pts[:, i] for i in range(6)]
+                                     + [np.asarray(times, dtype=float)], N_PAIR_TERMS)
+
     def local_terms(self, s, t):
         args = tuple(float(v) for v in s) + (float(t),)
         try:

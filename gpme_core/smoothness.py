@@ -1,6 +1,7 @@
 """Whether the constraint and programme expressions of a run are smooth where the run went.
 
 An expression given by a user (gpme_core.constraints.SympyPointConstraint phi(x, y, z, t),
+gpme_core.pair_constraints.SympyPairConstraint phi(x_a, ..., z_b, t) of two frames,
 gpme_core.time_functions.SympyTimeFunction f(t) of a programme) is accepted when its
 functions are smooth on part of the line (sqrt, log, division, ...): expression_checks
 cannot know where a run will go.  ``sqrt((z - 0.3)**2)`` is |z - 0.3|: accepted, and a run
@@ -41,6 +42,7 @@ import pandas as pd
 import sympy as sp
 
 from .constraints import CoordinateProgramme, JointProgramme, SympyPointConstraint
+from .pair_constraints import SympyPairConstraint
 from .expression_checks import evaluate_along, singular_parts, term_scale
 from .time_functions import SympyTimeFunction
 
@@ -132,6 +134,19 @@ def check_run(system, df: pd.DataFrame) -> list:
             hessian[:, :3, :3] = terms[:, 4:13].reshape(-1, 3, 3)
             hessian[:, :3, 3] = hessian[:, 3, :3] = terms[:, 14:17]
             hessian[:, 3, 3] = terms[:, 17]
+            out.append(_check(f"constraint {spec.name!r}", f"phi = {spec.expr}", spec.expr,
+                              spec.symbols, args, gradient, hessian))
+        elif isinstance(spec, SympyPairConstraint):
+            frames = (spec.frame_a, spec.frame_b)
+            points = df[[f"{a}_{f}" for f in frames for a in "xyz"]].to_numpy(dtype=float)
+            args = np.column_stack([points, times])
+            terms = spec.terms_along(points, times)
+            # (phi, grad (6), Hessian (36), phi_t, grad_t (6), phi_tt): in (s, t), 7 wide
+            gradient = np.column_stack([terms[:, 1:7], terms[:, 43]])
+            hessian = np.empty((len(times), 7, 7))
+            hessian[:, :6, :6] = terms[:, 7:43].reshape(-1, 6, 6)
+            hessian[:, :6, 6] = hessian[:, 6, :6] = terms[:, 44:50]
+            hessian[:, 6, 6] = terms[:, 50]
             out.append(_check(f"constraint {spec.name!r}", f"phi = {spec.expr}", spec.expr,
                               spec.symbols, args, gradient, hessian))
         elif isinstance(spec, (JointProgramme, CoordinateProgramme)) and isinstance(

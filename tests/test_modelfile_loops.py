@@ -134,3 +134,23 @@ frames = ["end_a", "end_b"]
 def test_bad_pair_constraints_name_the_key(tmp_path, text, message):
     with pytest.raises(ModelFileError, match=message):
         _load(tmp_path, text)
+
+
+def test_a_pair_expression_gets_its_smoothness_check():
+    """gpme_core.smoothness reads a two-frame expression along the run like a point one:
+    the rod's turning expression is smooth, |z_b - z_a| written as sqrt((z_b - z_a)**2)
+    held at zero sits on its kink and is named."""
+    from gpme_core.gpme import ProgrammedMotion
+    from gpme_core.pair_constraints import Distance, SympyPairConstraint
+    from gpme_core.smoothness import check_run
+    sc = load_model_file(REPO / "examples" / "five_bar" / "two_arms_rod.toml")
+    run = simulate(sc.system, 0.05, sc.q0, sc.q_dot0, dt=sc.dt, output_dt=1e-3)
+    (turn,) = check_run(sc.system, run)
+    assert turn.smooth and "rod_turn" in turn.who
+    kinked = ProgrammedMotion(sc.model, [
+        Distance("end_a", "end_b", 0.12),
+        SympyPairConstraint("sqrt((z_b - z_a)**2)", "end_a", "end_b", name="level")])
+    kinked = kinked.with_pivoted_dependent(0.0, sc.q0)
+    run = simulate(kinked, 0.02, sc.q0, sc.q_dot0, dt=1e-3, output_dt=1e-3)
+    (level,) = check_run(kinked, run)
+    assert not level.smooth and "sqrt: where" in level.describe()
