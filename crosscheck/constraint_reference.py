@@ -190,7 +190,7 @@ def with_reference_frames(model: Model, specs) -> Model:
         offset = tf.translation(*np.eye(3)[axis])
         frames[name] = Frame(name, base.link_index, base.transform @ offset)
     return Model(model.joints, model.links, frames, model.drives, model.gravity,
-                 model.flexible_links, model.name, model.geometry)
+                 model.flexible_links, model.name, model.geometry, model.point_springs)
 
 
 def with_reference_frames_of(scenario):

@@ -12,6 +12,8 @@ back.  docs/urdf.md shows the layout:
     massless_links  : [link names the writer knows carry no mass]
     flexible_links  : [{"name", "n_segments", "beam": BeamProperties fields, "joints", "links"}]
     drives          : [{"joint", "function": a gpme_core.time_functions class name, "parameters"}]
+    point_springs   : [{"name", "frame", "anchor": [x, y, z] m or a frame name, "stiffness"
+                      N/m, "free_length" m, "damping" N s/m}] (gpme_core.point_springs)
     tree            : true when every moving joint of the URDF is a coordinate (a model whose
                       branches all move; written only then, the reader then reads the
                       whole tree instead of one chain)
@@ -62,6 +64,12 @@ def side_document(model: Model, drives: list) -> dict:
             for f in model.flexible_links],
         "drives": drives,
         **({} if model.is_chain else {"tree": True}),
+        **({"point_springs": [
+            {"name": p.name, "frame": p.frame,
+             "anchor": p.anchor if isinstance(p.anchor, str) else [float(v) for v in p.anchor],
+             "stiffness": float(p.stiffness), "free_length": float(p.free_length),
+             "damping": float(p.damping)} for p in model.point_springs]}
+           if model.point_springs else {}),
     }
 
 
@@ -171,7 +179,8 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
         else:
             problems.append(f"{label}: tree must be true or false (whether every moving joint "
                             f"of the URDF is a coordinate), got {shown(side['tree'])}")
-    for key, check in (("flexible_links", _check_flexible), ("drives", _check_drive)):
+    for key, check in (("flexible_links", _check_flexible), ("drives", _check_drive),
+                       ("point_springs", _check_point_spring)):
         if key not in side:
             continue
         records = side[key]
@@ -194,7 +203,8 @@ def check_side_file(side: Any, label: str = "side file") -> tuple:
 
 
 SIDE_KEYS = ("format", "version", "model", "gravity", "joints", "massless_links",
-             "flexible_links", "drives", "tree")
+             "flexible_links", "drives", "tree", "point_springs")
+POINT_SPRING_KEYS = ("name", "frame", "anchor", "stiffness", "free_length", "damping")
 JOINT_KEYS = ("stiffness", "spring_reference")
 FLEXIBLE_KEYS = ("name", "n_segments", "beam", "joints", "links")
 DRIVE_KEYS = ("joint", "function", "parameters")
@@ -329,6 +339,28 @@ def _parameters(cls) -> tuple:
                 and f.default_factory is dataclasses.MISSING]
     text = ", ".join(f.name + ("" if f.name in required else " (optional)") for f in fields)
     return [f.name for f in fields], required, text
+
+
+def _check_point_spring(rec: Any, label: str, k: int, bad: list) -> None:
+    """Problems of point_springs record number ``k`` (1-based) into ``bad``."""
+    where = f"{label}: point spring record (point_springs #{k})"
+    if not isinstance(rec, dict):
+        bad.append(f"{where}: expected an object with {', '.join(POINT_SPRING_KEYS)}, got "
+                   f"{shown(rec)}")
+        return
+    bad += _unknown_keys(where, rec, POINT_SPRING_KEYS)
+    for key in ("name", "frame"):
+        if not (isinstance(rec.get(key), str) and rec.get(key)):
+            bad.append(f"{where}: {key} must be a non-empty string, got {shown(rec.get(key))}")
+    anchor = rec.get("anchor")
+    if not ((isinstance(anchor, str) and anchor) or (
+            isinstance(anchor, list) and len(anchor) == 3 and all(_is_number(x) for x in anchor))):
+        bad.append(f"{where}: anchor must be a frame name or 3 finite numbers (m, world "
+                   f"frame), got {shown(anchor)}")
+    for key, unit in (("stiffness", "N/m"), ("free_length", "m"), ("damping", "N s/m")):
+        v = rec.get(key)
+        if not (_is_number(v) and v >= 0):
+            bad.append(f"{where}: {key} must be a finite number >= 0 ({unit}), got {shown(v)}")
 
 
 def _check_drive(rec: Any, label: str, k: int, bad: list) -> None:

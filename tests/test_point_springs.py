@@ -84,3 +84,27 @@ def test_points_that_meet_are_a_clear_error():
     model = _with_springs(PointSpring("at_E", "E", tuple(p), 10.0, 0.1))
     with pytest.raises(ConstraintError, match="point spring 'at_E': its points meet"):
         dy.dynamics_terms(model, 0.0, q, q)
+
+
+def test_pinocchio_side_computes_the_same_spring_forces(rng, tmp_path):
+    """crosscheck.pinocchio's PinocchioSystem.point_spring_forces (its frame placements,
+    velocities and Jacobians) equals gpme's -(f + d) of the point springs, built joint by
+    joint and read from the URDF and side file gpme writes (round-off of sums of a few
+    products: 1e-12 of the largest)."""
+    from crosscheck.pinocchio.model import from_gpme, from_urdf
+    from gpme_io.urdf import write_urdf
+    model = _with_springs(*SPRINGS)
+    bare = _with_springs()
+    urdf, _ = write_urdf(model, tmp_path / "sprung.urdf")
+    from gpme_io.urdf_reader import load_urdf
+    assert load_urdf(urdf).model.point_springs == model.point_springs   # via the side file
+    sides = (from_gpme(model), from_urdf(urdf, model.coordinate_names,
+                                         [lk.name for lk in model.links], list(model.frames)))
+    for _ in range(3):
+        q, q_dot = rng.uniform(-1, 1, model.n_coordinates), rng.uniform(-1, 1, model.n_coordinates)
+        a, b = dy.dynamics_terms(model, 0.0, q, q_dot), dy.dynamics_terms(bare, 0.0, q, q_dot)
+        ours = -((a.f - b.f) + (a.d - b.d))
+        for ps in sides:
+            theirs = ps.point_spring_forces(q, q_dot)
+            np.testing.assert_allclose(ours, theirs, rtol=0,
+                                       atol=1e-12 * max(1.0, np.abs(theirs).max()))

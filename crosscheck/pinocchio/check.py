@@ -184,7 +184,8 @@ def original_urdf_case(scenario) -> Optional[ModelCase]:
     pin_sys = from_original_urdf(scenario.urdf, model.coordinate_names,
                                  [lk.name for lk in model.links], list(model.frames),
                                  scenario.frozen, model.gravity, model.stiffness,
-                                 model.spring_reference, model.damping)
+                                 model.spring_reference, model.damping,
+                                 point_springs=model.point_springs)
     return _case(f"{scenario.name} (original URDF)", "original URDF", scenario,
                  scenario.system, pin_sys)
 

@@ -32,6 +32,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from gpme_core.errors import ModelFileError
+from gpme_core.point_springs import PointSpring
 from gpme_io.urdf import load_side_file, side_file_path
 
 _AXES = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
@@ -54,6 +55,9 @@ class PinocchioSystem:
     continuous      : (n,) True where Pinocchio holds (cos q, sin q) (nq = 2)
     locked          : {URDF joint name: value (rad or m)} joints locked by buildReducedModel
     notes           : what this side takes from where, one line each (for the report)
+    point_springs   : gpme_core.point_springs.PointSpring data (frame names, anchors,
+                      stiffness, free length, damping) whose forces this side computes from
+                      Pinocchio's own frame placements, velocities and Jacobians
     """
 
     model: object
@@ -68,6 +72,7 @@ class PinocchioSystem:
     continuous: NDArray[np.bool_]
     locked: Mapping[str, float] = field(default_factory=dict)
     notes: tuple = ()
+    point_springs: tuple = ()
 
     def q_pin(self, q: NDArray) -> NDArray:
         """(nq,) Pinocchio configuration of the gpme coordinates q (n,) (rad, m)."""
@@ -95,10 +100,45 @@ class PinocchioSystem:
         return np.asarray(a, dtype=float)[..., self.v_index]
 
     def applied_forces(self, q, q_dot, drives):
-        """(n,) tau = -K (q - q_ref) - D q_dot + drives, N or N m, gpme order: the joint
-        forces that Pinocchio's M a + b = tau takes (gpme's Q without gravity, which
-        Pinocchio adds)."""
-        return -self.stiffness * (q - self.spring_reference) - self.damping * q_dot + drives
+        """(n,) tau = -K (q - q_ref) - D q_dot + drives + the point springs' J^T F, N or
+        N m, gpme order: the joint forces that Pinocchio's M a + b = tau takes (gpme's Q
+        without gravity, which Pinocchio adds)."""
+        tau = -self.stiffness * (q - self.spring_reference) - self.damping * q_dot + drives
+        return tau + self.point_spring_forces(q, q_dot) if self.point_springs else tau
+
+    def point_spring_forces(self, q, q_dot):
+        """(n,) generalized forces of the point springs, gpme order: F = -(k (L - L0) +
+        c L_dot) e on the spring's frame (e from its anchor to it), -F on an anchor frame,
+        mapped by Pinocchio's frame Jacobians (LOCAL_WORLD_ALIGNED, linear rows)."""
+        pm = self.model
+        data = pm.createData()
+        q_pin, v_pin = self.q_pin(q), self.to_pin(q_dot)
+        pin.forwardKinematics(pm, data, q_pin, v_pin)
+        pin.computeJointJacobians(pm, data, q_pin)
+        pin.updateFramePlacements(pm, data)
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+        def point(frame):
+            fid = self.frames[frame]
+            jac = np.asarray(pin.getFrameJacobian(pm, data, fid, lwa)).reshape(6, pm.nv)[:3]
+            return (data.oMf[fid].translation.copy(),
+                    pin.getFrameVelocity(pm, data, fid, lwa).linear.copy(),
+                    self.columns_to_gpme(jac))
+
+        out = np.zeros(len(self.v_index))
+        for s in self.point_springs:
+            p_a, v_a, j_a = point(s.frame)
+            if isinstance(s.anchor, str):
+                p_b, v_b, j_b = point(s.anchor)
+            else:
+                p_b, v_b, j_b = np.asarray(s.anchor, float), np.zeros(3), 0.0
+            d = p_a - p_b
+            length = float(np.linalg.norm(d))
+            e = d / length
+            force = -(s.stiffness * (length - s.free_length)
+                      + s.damping * float(e @ (v_a - v_b))) * e
+            out += force @ (j_a - j_b)
+        return out
 
 
 def _identity_map(n):
@@ -140,7 +180,8 @@ def from_gpme(model) -> PinocchioSystem:
     return PinocchioSystem(pm, tuple(link_frames), frames, model.stiffness.copy(),
                            model.spring_reference.copy(), np.array(pm.damping), "gpme",
                            *_identity_map(model.n_coordinates),
-                           notes=("pin.Model built joint by joint from the gpme model",))
+                           notes=("pin.Model built joint by joint from the gpme model",),
+                           point_springs=tuple(model.point_springs))
 
 
 def from_urdf(urdf_path, coordinate_names, link_names, frame_names,
@@ -178,6 +219,12 @@ def from_urdf(urdf_path, coordinate_names, link_names, frame_names,
                            {f: _frame_id(pm, f) for f in frame_names}, stiffness, reference,
                            np.array(pm.damping)[v_index], "urdf", q_index, v_index,
                            np.zeros(len(ids), dtype=bool),
+                           point_springs=tuple(
+                               PointSpring(r["name"], r["frame"],
+                                           r["anchor"] if isinstance(r["anchor"], str)
+                                           else tuple(r["anchor"]), r["stiffness"],
+                                           r["free_length"], r.get("damping", 0.0))
+                               for r in side.get("point_springs", [])),
                            notes=(f"Pinocchio's URDF parser on {Path(urdf_path).name}; springs "
                                   "and gravity from its side file",))
 
@@ -208,7 +255,8 @@ def _lock_value(joint, value, name, problems):
 
 def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: Sequence[str],
                        frame_names: Sequence[str], frozen: Mapping[str, float], gravity,
-                       stiffness, spring_reference, damping) -> PinocchioSystem:
+                       stiffness, spring_reference, damping,
+                       point_springs=()) -> PinocchioSystem:
     """:class:`PinocchioSystem` of the user's URDF, reduced to the gpme chain by Pinocchio.
 
     urdf_path        : the user's URDF (whole tree); Pinocchio's parser reads it
@@ -217,6 +265,8 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
     frozen           : {URDF joint: value (rad or m)}; every other joint off the chain is
                        locked at 0 (Pinocchio's neutral configuration for it)
     gravity          : (3,) m/s^2, world frame (a URDF has none)
+    point_springs    : the model's point springs (a URDF has none), evaluated here from
+                       Pinocchio's frames
     stiffness, spring_reference, damping : (n,) gpme order; a URDF has no springs, and a
                        model file may override the URDF's <dynamics damping>, so these come
                        from the model (the only terms not read by Pinocchio here); the
@@ -295,4 +345,5 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
                            np.asarray(spring_reference, dtype=float).copy(),
                            np.asarray(damping, dtype=float).copy(), "original urdf",
                            np.array(q_index, dtype=int), v_index,
-                           np.array(continuous, dtype=bool), locked, tuple(notes))
+                           np.array(continuous, dtype=bool), locked, tuple(notes),
+                           tuple(point_springs))

@@ -23,6 +23,7 @@ from gpme_core.errors import ConstraintError, ModelError, ModelFileError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.kinematics import chain_kinematics
 from gpme_core.model import Drive, Frame, Model, validate_model
+from gpme_core.point_springs import PointSpring
 from gpme_core.pair_constraints import (Distance, RelativeCoordinate, SympyPairConstraint,
                                         aligned, coincident, weld)
 from gpme_core.rfem import BeamSection
@@ -166,6 +167,12 @@ def reference_problems(spec: ModelFile, model: Model) -> list:
         for frame in constraint_frames(c):
             if frame not in frames:
                 out.append(f"{c.key}.{field}: " + _unknown("frame or link", frame, frames))
+    for x in spec.point_springs:
+        ends = [("frame", x.frame)] + ([("anchor", x.anchor)] if isinstance(x.anchor, str)
+                                       else [])
+        for field, frame in ends:
+            if frame not in frames:
+                out.append(f"{x.key}.{field}: " + _unknown("frame or link", frame, frames))
     for p in spec.programmes:
         if p.joint not in coords:
             out.append(f"{p.key}.joint: " + _unknown("coordinate", p.joint, coords))
@@ -215,12 +222,15 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                      + ", ".join(f"{d.joint}: {d.function!r}" for d in model.drives))
     frames = dict(model.frames)
     link_index = {lk.name: k for k, lk in enumerate(model.links)}
-    for c in spec.constraints:
-        for frame in constraint_frames(c):
-            if frame not in frames:
-                frames[frame] = Frame(frame, link_index[frame], np.eye(4))
-                notes.append(f"{c.key}: frame {frame!r} is the frame of link {frame!r} (its "
-                             "joint frame; the constraint acts on its origin and axes)")
+    # a link named where a frame is asked for: its joint frame
+    named = [(c, f) for c in spec.constraints for f in constraint_frames(c)] + \
+        [(x, f) for x in spec.point_springs
+         for f in [x.frame] + ([x.anchor] if isinstance(x.anchor, str) else [])]
+    for entry, frame in named:
+        if frame not in frames:
+            frames[frame] = Frame(frame, link_index[frame], np.eye(4))
+            notes.append(f"{entry.key}: frame {frame!r} is the frame of link {frame!r} (its "
+                         "joint frame; the entry acts on its origin and axes)")
     for d in spec.drives:
         if isinstance(d.function, Tabulated):
             notes.append(_table_note(d.key, d.function, "N or N m"))
@@ -230,8 +240,12 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
     try:
         if changes:
             model = model.with_changes(joint_changes=changes)
+        springs = model.point_springs + tuple(
+            PointSpring(x.name, x.frame, x.anchor if isinstance(x.anchor, str)
+                        else tuple(x.anchor), x.stiffness, x.free_length, x.damping)
+            for x in spec.point_springs)
         model = Model(model.joints, model.links, frames, drives, model.gravity,
-                      model.flexible_links, model.name, model.geometry)
+                      model.flexible_links, model.name, model.geometry, springs)
         validate_model(model)
     except ModelError as exc:
         raise ModelFileError([f"{label}: joint: {p}" for p in exc.problems]) from None

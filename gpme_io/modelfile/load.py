@@ -30,12 +30,15 @@ from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, PAIR_KINDS, PAIR_SY
                      POINT_SYMBOLS, SECTION_SHAPES, TIME_SYMBOLS, ChainSection,
                      CoordinateConstraintSpec, CraneSource, DriveSpec, EllipseConstraintSpec,
                      ExpressionConstraintSpec, FlexibleSpec, InitialSpec, JointSpec, ModelFile,
-                     ModelSection, PairConstraintSpec, ProgrammeSpec, RunSpec, SectionSpec,
+                     ModelSection, PairConstraintSpec, PointSpringSpec, ProgrammeSpec,
+                     RunSpec, SectionSpec,
                      SolverSpec, TreeSection, UrdfSource, constraint_rows)
 
-TOP_LEVEL = ("model", "chain", "tree", "flexible", "joint", "drive", "constraint", "programme",
+TOP_LEVEL = ("model", "chain", "tree", "flexible", "joint", "drive", "point_spring",
+             "constraint", "programme",
              "solver", "initial", "run", "tolerance", "engine_step")
-ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "constraint", "programme", "tolerance",
+ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "point_spring", "constraint", "programme",
+                    "tolerance",
                     "engine_step")
 ROBOT_DATA_PREFIX = "example-robot-data:"
 ROBOT_DATA_DISTRIBUTION = "example-robot-data"
@@ -291,6 +294,9 @@ def parse_model_data(data: dict, path: Path) -> tuple:
     _unique(c, [(j.key, j.name) for j in joints], "name", "joint")
     drives = tuple(d for k, e in enumerate(entries["drive"])
                    if (d := _drive(c, e, f"drive[{k}]", t_end)) is not None)
+    point_springs = tuple(x for k, e in enumerate(entries["point_spring"])
+                          if (x := _point_spring(c, e, f"point_spring[{k}]")) is not None)
+    _unique(c, [(x.key, x.name) for x in point_springs], "name", "point spring")
     constraints = tuple(x for k, e in enumerate(entries["constraint"])
                         if (x := _constraint(c, e, f"constraint[{k}]", t_end)) is not None)
     programmes = tuple(p for k, e in enumerate(entries["programme"])
@@ -313,7 +319,8 @@ def parse_model_data(data: dict, path: Path) -> tuple:
             "engine", "engine_step")
     mf = ModelFile(path=path, model=model, chain=chain, tree=tree, flexible=flexible,
                    joints=joints,
-                   drives=drives, constraints=constraints, programmes=programmes,
+                   drives=drives, point_springs=point_springs, constraints=constraints,
+                   programmes=programmes,
                    solver=solver, initial=initial, run=run, tolerances=tolerances,
                    engine_steps=engine_steps)
     return mf, c.problems
@@ -670,6 +677,33 @@ def _drive(c: _Checker, e: dict, path: str, t_end) -> Optional[DriveSpec]:
     if len(c.problems) > n0 or fn is None:
         return None
     return DriveSpec(path, joint, fn)
+
+
+def _point_spring(c: _Checker, e: dict, path: str) -> Optional[PointSpringSpec]:
+    c.keys(e, ("name", "frame", "anchor", "stiffness", "free_length", "damping"), path)
+    n0 = len(c.problems)
+    index = int(path[path.index("[") + 1:-1])
+    name = f"spring_{index + 1}"
+    if "name" in e:
+        name = c.string(e, "name", path, "the spring's name")
+    frame = c.string(e, "frame", path, "a named frame or link of the model")
+    anchor = e.get("anchor")
+    if isinstance(anchor, str) and anchor:
+        pass
+    elif "anchor" in e and isinstance(anchor, list):
+        anchor = c.vector(e, "anchor", path, 3, "m, a world point")
+    else:
+        c.add(f"{path}.anchor", f"must be a frame name or a world point [x, y, z] (m), got "
+              f"{_type_name(anchor)} {anchor!r}" if "anchor" in e else
+              "missing; the other end: a frame name or a world point [x, y, z] (m)")
+    stiffness = c.number(e, "stiffness", path, "N/m", rule=">=0")
+    free_length = c.number(e, "free_length", path, "m, the length at which it is relaxed",
+                           rule=">=0")
+    damping = c.number(e, "damping", path, "N s/m", required=False, rule=">=0")
+    if len(c.problems) > n0:
+        return None
+    return PointSpringSpec(path, name, frame, anchor, stiffness, free_length,
+                           0.0 if damping is None else damping)
 
 
 # ====================================================================== constraints

@@ -154,6 +154,21 @@ class DriveSpec:
 
 
 @dataclass(frozen=True)
+class PointSpringSpec:
+    """[[point_spring]]: a spring-damper from the origin of frame ``frame`` to ``anchor``
+    (a world point (3,) m, or another frame's name); stiffness N/m, free_length m,
+    damping N s/m (gpme_core.point_springs)."""
+
+    key: str
+    name: str
+    frame: str
+    anchor: Union[str, tuple]
+    stiffness: float
+    free_length: float
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
 class ExpressionConstraintSpec:
     """[[constraint]] phi(x, y, z, t) = 0 on the world position (m) of frame ``frame``."""
 
@@ -296,6 +311,7 @@ class ModelFile:
     flexible: tuple = ()
     joints: tuple = ()
     drives: tuple = ()
+    point_springs: tuple = ()   # PointSpringSpec, in file order
     constraints: tuple = ()
     programmes: tuple = ()
     solver: SolverSpec = SolverSpec()

@@ -68,6 +68,9 @@ def _assemble(builder, chain, parents, placement, side_use, inertias, flexible, 
             frames.append(x)
     for rec in side_use.drives:
         builder.add_drive(rec["joint"], drive_function(rec))
+    for rec in side_use.point_springs:
+        builder.add_point_spring(rec["name"], rec["frame"], rec["anchor"], rec["stiffness"],
+                                 rec["free_length"], rec.get("damping", 0.0))
     model = builder.build()
     return _with_flexible_records(model, side_use.flexible, flexible), tuple(frames)
 
@@ -118,6 +121,6 @@ def _with_flexible_records(model, side_flex, flexible) -> Model:
     order = {lk.name: k for k, lk in enumerate(model.links)}
     records.sort(key=lambda r: order.get(r.name, -1))
     out = Model(model.joints, model.links, model.frames, model.drives, model.gravity, records,
-                model.name, model.geometry)
+                model.name, model.geometry, model.point_springs)
     validate_model(out)
     return out

@@ -21,6 +21,6 @@ def with_link_frames(model: Model, names) -> Model:
     frames = dict(model.frames)
     frames.update({n: Frame(n, index[n], np.eye(4)) for n in missing})
     out = Model(model.joints, model.links, frames, model.drives, model.gravity,
-                model.flexible_links, model.name, model.geometry)
+                model.flexible_links, model.name, model.geometry, model.point_springs)
     validate_model(out)
     return out

@@ -14,11 +14,13 @@ class _SideUse:
     joints   : {chain joint name: {"stiffness", "spring_reference"}}
     drives   : the drive records on chain joints
     flexible : {record name: RFEM record} whose joints and links are all in the chain
+    point_springs : the point-spring records (their frames are checked by the built model)
     """
 
     joints: dict
     drives: list
     flexible: dict
+    point_springs: list = ()
 
 
 def _match_side(side, tree, chain, side_massless, problems) -> _SideUse:
@@ -51,4 +53,4 @@ def _match_side(side, tree, chain, side_massless, problems) -> _SideUse:
                             f"links {chain_links})")
         else:
             side_flex[rec["name"]] = rec
-    return _SideUse(side_joints, side_drives, side_flex)
+    return _SideUse(side_joints, side_drives, side_flex, list(side.get("point_springs", [])))
