@@ -108,3 +108,60 @@ def test_pinocchio_side_computes_the_same_spring_forces(rng, tmp_path):
             theirs = ps.point_spring_forces(q, q_dot)
             np.testing.assert_allclose(ours, theirs, rtol=0,
                                        atol=1e-12 * max(1.0, np.abs(theirs).max()))
+
+
+def test_mujoco_tendons_give_the_same_spring_forces(rng):
+    """The MJCF's spatial tendons (stiffness, damping, springlength between the frames'
+    sites) give in MuJoCo's qfrc_passive the same forces as gpme's point springs (the
+    difference of the model with and without them; measured 1.1e-13 of ~500 N)."""
+    import mujoco
+    from crosscheck.mujoco.mjcf import mjcf_text
+    from crosscheck.mujoco.sim import chain_map, set_state
+    model, bare = _with_springs(*SPRINGS), _with_springs()
+    engines = [mujoco.MjModel.from_xml_string(mjcf_text(m, 1e-3)) for m in (model, bare)]
+    for _ in range(3):
+        q, q_dot = rng.uniform(-1, 1, model.n_coordinates), rng.uniform(-1, 1, model.n_coordinates)
+        passive = []
+        for mj in engines:
+            data = mujoco.MjData(mj)
+            cmap = chain_map(mj, model)
+            set_state(mj, data, cmap, q, q_dot)
+            mujoco.mj_forward(mj, data)
+            passive.append(data.qfrc_passive[cmap.dof].copy())
+        a, b = dy.dynamics_terms(model, 0.0, q, q_dot), dy.dynamics_terms(bare, 0.0, q, q_dot)
+        ours = -((a.f - b.f) + (a.d - b.d))
+        np.testing.assert_allclose(passive[0] - passive[1], ours, rtol=0,
+                                   atol=1e-12 * max(1.0, np.abs(ours).max()))
+
+
+def test_drake_linear_spring_dampers_give_the_same_forces(rng, tmp_path):
+    """Drake's LinearSpringDamper elements, added from the side file's records to the plant
+    its parser makes of the written URDF, give the same spring and damper forces as gpme's
+    point springs (with the joint springs and dampers in both)."""
+    from crosscheck.drake.check import drake_terms
+    from crosscheck.drake.model import for_model
+    model = _with_springs(*SPRINGS)
+    ds = for_model(model, tmp_path)
+    context = ds.plant.CreateDefaultContext()
+    for _ in range(3):
+        q, q_dot = rng.uniform(-1, 1, model.n_coordinates), rng.uniform(-1, 1, model.n_coordinates)
+        terms = dy.dynamics_terms(model, 0.0, q, q_dot)
+        d = drake_terms(ds, context, 0.0, q, q_dot, np.zeros(model.n_coordinates))
+        for ours, theirs in ((-terms.f, d["springs"]), (-terms.d, d["dampers"])):
+            np.testing.assert_allclose(ours, theirs, rtol=0,
+                                       atol=1e-12 * max(1.0, np.abs(theirs).max()))
+
+
+def test_exudyn_spring_dampers_give_the_same_forces(rng):
+    """Exudyn's ObjectConnectorSpringDamper between MarkerKinematicTreeRigid points (and a
+    ground point) in its kinematic tree: its right-hand side f (M q_ddot = f) equals gpme's
+    h + Q with the point springs, to round-off."""
+    from crosscheck.exudyn.model import mass_and_forces
+    model = _with_springs(*SPRINGS)
+    for _ in range(3):
+        q, q_dot = rng.uniform(-1, 1, model.n_coordinates), rng.uniform(-1, 1, model.n_coordinates)
+        terms = dy.dynamics_terms(model, 0.0, q, q_dot)
+        _, f_exu = mass_and_forces(model, 0.0, q, q_dot, "lagrange")
+        ours = terms.h + terms.Q
+        np.testing.assert_allclose(f_exu, ours, rtol=0,
+                                   atol=1e-11 * max(1.0, np.abs(ours).max()))

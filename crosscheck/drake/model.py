@@ -43,8 +43,8 @@ import pydrake
 from numpy.typing import NDArray
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import (BodyIndex, JointIndex, PrismaticJoint, PrismaticSpring,
-                                    RevoluteJoint, RevoluteSpring)
+from pydrake.multibody.tree import (BodyIndex, JointIndex, LinearSpringDamper, PrismaticJoint,
+                                   PrismaticSpring, RevoluteJoint, RevoluteSpring)
 
 from gpme_core.errors import ModelFileError
 from gpme_io.file_names import named_path
@@ -253,6 +253,25 @@ def from_urdf(urdf_path, coordinate_names: Sequence[str], body_names: Sequence[s
         except Exception as exc:
             problems.append(f"joint {c!r}: Drake refuses the spring stiffness {k!r}, "
                             f"reference {ref!r}: {exc} (stiffness must be >= 0)")
+    for rec in side.get("point_springs", []):
+        # a spring between two frames (URDF links of their names, Drake bodies) or a frame
+        # and a world point: Drake's own LinearSpringDamper (its free length must be > 0)
+        ends = []
+        for end in (rec["frame"], rec["anchor"]):
+            if isinstance(end, str):
+                if not plant.HasBodyNamed(end):
+                    problems.append(f"point spring {rec['name']!r}: Drake has no body {end!r}")
+                    break
+                ends += [plant.GetBodyByName(end), np.zeros(3)]
+            else:
+                ends += [plant.world_body(), np.asarray(end, dtype=float)]
+        else:
+            try:
+                plant.AddForceElement(LinearSpringDamper(
+                    ends[0], ends[1], ends[2], ends[3], float(rec["free_length"]),
+                    float(rec["stiffness"]), float(rec.get("damping", 0.0))))
+            except Exception as exc:
+                problems.append(f"point spring {rec['name']!r}: Drake refuses it: {exc}")
     g = np.array(side.get("gravity", (0.0, 0.0, -9.81)) if gravity is None else gravity,
                  dtype=float)
     if g.shape != (3,) or not np.all(np.isfinite(g)):

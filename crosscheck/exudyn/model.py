@@ -34,8 +34,10 @@ from typing import Mapping
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (LoadCoordinate, MarkerNodeCoordinate, MarkerNodeCoordinates,
-                                  NodeGenericODE2, NodePointGround, ObjectConnectorCoordinateSpringDamper,
+from exudyn.itemInterface import (LoadCoordinate, MarkerBodyPosition, MarkerKinematicTreeRigid,
+                                  MarkerNodeCoordinate, MarkerNodeCoordinates, NodeGenericODE2,
+                                  NodePointGround, ObjectConnectorCoordinateSpringDamper,
+                                  ObjectConnectorSpringDamper, ObjectGround,
                                   ObjectKinematicTree)
 from numpy.typing import NDArray
 
@@ -213,8 +215,17 @@ def add_tree(mbs, model, q0, q_dot0, damping_form: str = "lagrange") -> ExudynTr
         drives[drive.joint] = mbs.AddLoad(LoadCoordinate(
             markerNumber=coordinate_marker(k), load=0.0,
             loadUserFunction=lambda mbs_, t, load, f=function: float(f(t))))
+    for spring in model.point_springs:
+        springs[spring.name] = mbs.AddObject(ObjectConnectorSpringDamper(
+            markerNumbers=[_point_marker(mbs, model, tree, lay, spring.frame),
+                           _point_marker(mbs, model, tree, lay, spring.anchor)],
+            referenceLength=float(spring.free_length), stiffness=float(spring.stiffness),
+            damping=float(spring.damping)))
     notes = [f"ObjectKinematicTree with {n} joints from the gpme model's joint origins, axes "
              "and link inertias (data only)"]
+    if model.point_springs:
+        notes.append(f"{len(model.point_springs)} ObjectConnectorSpringDamper (point springs) "
+                     "between MarkerKinematicTreeRigid points of the tree and ground points")
     if lay.unaligned:
         notes.append("joint axes rotated onto a coordinate axis (inertia, COM and the "
                      "children's transforms carried along): " + ", ".join(lay.unaligned))
@@ -223,6 +234,22 @@ def add_tree(mbs, model, q0, q_dot0, damping_form: str = "lagrange") -> ExudynTr
                  f"{np.asarray(model.gravity, float).tolist()} m/s^2 as the tree's own")
     return ExudynTree(mbs, node, tree, node_marker, ground_marker, n,
                       tuple(model.coordinate_names), springs, drives, lay, tuple(notes))
+
+
+def _point_marker(mbs, model, tree, lay, end):
+    """Exudyn marker of one end of a point spring: the origin of a gpme frame on the tree
+    (its link's MarkerKinematicTreeRigid; the gpme link frame is Exudyn's joint frame
+    turned by the axis rotation R_a, so the point is R_a^T r there), or a world point
+    (a MarkerBodyPosition on an ObjectGround)."""
+    if isinstance(end, str):
+        fr = model.frame(end)
+        local = lay.axis_rotations[fr.link_index].T @ fr.transform[:3, 3]
+        return mbs.AddMarker(MarkerKinematicTreeRigid(objectNumber=tree,
+                                                      linkNumber=int(fr.link_index),
+                                                      localPosition=local.tolist()))
+    ground = mbs.AddObject(ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+    return mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground,
+                                            localPosition=[float(v) for v in end]))
 
 
 def quiet_settings(end_time: float = 1.0, steps: int = 1):

@@ -152,6 +152,7 @@ def bounded_inertia(link):
 
 
 WORLD_BODY = "world"       # MuJoCo's own name of its world body
+ANCHOR_SUFFIX = "_anchor"  # the site of a point spring's fixed world anchor
 DRIVE_PREFIX = "drive_"    # the motor of the drive on joint j is "drive_<j>" (crosscheck.mujoco.sim)
 KEYFRAME = "start"
 # names the auxiliary mechanism gives its MuJoCo objects (its joints: mech.AUX_JOINTS)
@@ -207,6 +208,11 @@ def name_problems(model: Model, programme: mech.EllipticProgramme | None = None)
             problems.append(p)
         else:
             spaces[space].append((name, f"{kind} {name!r}"))
+    for spring in model.point_springs:
+        spaces["tendon"].append((spring.name, f"point spring {spring.name!r}"))
+        if not isinstance(spring.anchor, str):
+            spaces["site"].append((spring.name + ANCHOR_SUFFIX,
+                                   f"the anchor of point spring {spring.name!r}"))
     for d in model.drives:
         if isinstance(d.joint, str):   # validate_model: a coordinate name, checked above
             spaces["actuator"].append((DRIVE_PREFIX + d.joint, f"the drive on joint {d.joint!r}"))
@@ -305,6 +311,28 @@ def _chain(worldbody, model, meshes=None):
             ET.SubElement(body, "site", name=name, **_pose_attributes(fr.transform),
                           size="0.02", rgba="1 0.2 0.2 1")
         bodies[last] = body
+
+
+def _point_springs(root, worldbody, model):
+    """One spatial <tendon> per point spring (gpme_core.point_springs) between the sites of
+    its frames (a world anchor gets a site ``<spring>_anchor`` in the world body): MuJoCo
+    adds -stiffness (L - springlength) - damping L_dot along the tendon to qfrc_passive."""
+    if not model.point_springs:
+        return
+    tendon = root.find("tendon")
+    if tendon is None:
+        tendon = ET.SubElement(root, "tendon")
+    for spring in model.point_springs:
+        anchor = spring.anchor
+        if not isinstance(anchor, str):
+            ET.SubElement(worldbody, "site", name=spring.name + ANCHOR_SUFFIX, pos=_vec(anchor),
+                          size="0.01", rgba="0.2 1 0.2 1")
+            anchor = spring.name + ANCHOR_SUFFIX
+        spatial = ET.SubElement(tendon, "spatial", name=spring.name,
+                                stiffness=_f(spring.stiffness), damping=_f(spring.damping),
+                                springlength=_f(spring.free_length))
+        ET.SubElement(spatial, "site", site=spring.frame)
+        ET.SubElement(spatial, "site", site=anchor)
 
 
 def _light_inertial(body, settings):
@@ -440,6 +468,7 @@ def mjcf_element(model: Model, dt: float = 1e-4, constraints: Sequence | None = 
         root.insert(list(root).index(worldbody), asset)
     if programme is not None:
         _mechanism(root, worldbody, model, programme, settings)
+    _point_springs(root, worldbody, model)
     if model.drives:
         actuator = ET.SubElement(root, "actuator")
         for d in model.drives:
