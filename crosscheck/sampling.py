@@ -53,3 +53,24 @@ def state_ranges(model, flexible: Optional[Sequence[str]] = None,
         raise ValueError(f"{model.name}: empty sampling range for {bad} (q0 outside its "
                          "limits?)")
     return lo, hi, rate
+
+
+# s, spacing of the samples at which two engines' runs are compared
+COMPARED_DT = 1e-2
+# samples a run shorter than MIN_COMPARED_SAMPLES x COMPARED_DT is compared at instead
+MIN_COMPARED_SAMPLES = 10
+
+
+def compared_output_dt(t_run: float, dt: float) -> float:
+    """s, spacing of the compared samples of a run of t_run s at a step of dt s: COMPARED_DT
+    when the run holds at least MIN_COMPARED_SAMPLES of them, else the spacing that gives
+    it about that many (a benchmark of milliseconds, a short quick run); always a whole
+    number of steps dt that divides the run (every engine's step halvings keep both)."""
+    t_run, dt = float(t_run), float(dt)
+    if t_run >= MIN_COMPARED_SAMPLES * COMPARED_DT - 1e-12:
+        return COMPARED_DT
+    steps = max(1, int(round(t_run / dt)))
+    per_sample = max(1, steps // MIN_COMPARED_SAMPLES)
+    while steps % per_sample:
+        per_sample -= 1
+    return per_sample * dt

@@ -36,6 +36,7 @@ from gpme_core.errors import ConstraintError, SimulationError
 from .. import halving_gates, run_gates
 from ..engine_steps import engine_first_step
 from ..compare import Tolerance, compare
+from ..sampling import COMPARED_DT, compared_output_dt
 from ..convergence import FINEST, RefinementBudget, refine
 from ..mujoco.cases import free_variant
 from ..pinocchio.runs import run_step, run_t_end
@@ -43,7 +44,8 @@ from .model import DrakeSystem, for_model
 
 ENGINE = "drake"
 FREE = "free run"
-OUTPUT_DT = 1e-2            # s, spacing of the compared samples
+OUTPUT_DT = COMPARED_DT     # s, spacing of the compared samples (shorter runs:
+#                             crosscheck.sampling.compared_output_dt)
 SCHEME = "runge_kutta5"     # pydrake.systems.analysis.GetIntegrationSchemes()
 SCHEME_TEXT = "Runge-Kutta 5 (Dormand-Prince), fixed step"
 SCHEME_ORDER = 5.0
@@ -159,12 +161,13 @@ def _gpme_free_runs(free, t_end: float, dt: float) -> tuple:
     gpme refuses and Drake's continuous plant would not notice); None when even the shortest
     cannot be run (the note says why)."""
     t_run, last = t_end, ""
+    spacing = compared_output_dt(t_end, dt)
     while True:
         try:
             refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_run,
-                                                  dt, OUTPUT_DT, compared=FINEST)
+                                                  dt, spacing, compared=FINEST)
         except (SimulationError, ConstraintError) as exc:   # diverged, or left a joint range
-            shorter = round(t_run / 2.0 / OUTPUT_DT) * OUTPUT_DT
+            shorter = round(t_run / 2.0 / spacing) * spacing
             if shorter < MIN_FREE_T_END:
                 return None, t_run, (f"the free motion cannot be run for {MIN_FREE_T_END:g} s: "
                                      f"{exc}")
@@ -196,7 +199,8 @@ def run_section(scenario, quick: bool, log=None, urdf_dir=None) -> list:
                         [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {why}"), ["-"])]
     first, note, budget = engine_first_step(scenario, ENGINE, refined.dt, REFINEMENT)
     with tempfile.TemporaryDirectory() as tmp:
-        drake = halved_drake_runs(free, t_run, first, OUTPUT_DT, urdf_dir or tmp,
+        drake = halved_drake_runs(free, t_run, first, compared_output_dt(t_end, dt),
+                                  urdf_dir or tmp,
                                   log=lambda m: log(f"{FREE} {free.name}: drake {m}"),
                                   budget=budget)
     case = (f"{FREE}, drive on, {t_run:g} s{why}; gpme RK4 at dt = {refined.dt:g}, dt/2, "

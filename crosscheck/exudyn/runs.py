@@ -40,6 +40,7 @@ from gpme_core.stability import rk4_step
 
 from .. import halving_gates, run_gates
 from ..compare import Tolerance, compare
+from ..sampling import COMPARED_DT, compared_output_dt
 from ..convergence import FINEST, RefinementBudget, refine
 from ..engine_steps import engine_first_step
 from ..halving_gates import HalvedRuns
@@ -52,7 +53,8 @@ EPS = float(np.finfo(float).eps)
 ENGINE = "exudyn"
 SCHEME = "generalized-alpha, index 3"
 ORDER = 2.0                      # global order of generalized-alpha in q, q_dot and lambda
-OUTPUT_DT = 1e-2                 # s, spacing of the compared samples
+OUTPUT_DT = COMPARED_DT          # s, spacing of the compared samples (shorter runs:
+#                                  crosscheck.sampling.compared_output_dt)
 SPECTRAL_RADIUS = 0.9            # rho_inf: Exudyn's default; index 3 needs rho < 1
 # Newton (Exudyn's residual norm): full Newton reaches round-off within these; 1e-2 of
 # these gives bit-identical runs (measured on the crane), so the converged solution does
@@ -420,18 +422,19 @@ def run_section(scenario, quick: bool, log=None, refined=None, exudyn_dt: Option
     if start_rows:
         refined = None                       # made from the scenario's own start
     start = time.perf_counter()
+    spacing = compared_output_dt(t_end, dt)
     if refined is None:
         refined = run_gates.refined_gpme_runs(scenario.system, q0, q_dot0, t_end, dt,
-                                              OUTPUT_DT, compared=FINEST,
+                                              spacing, compared=FINEST,
                                               log=lambda m: log(f"exudyn {scenario.name}: "
                                                                 f"gpme {m}"))
     gpme_wall = time.perf_counter() - start
     cols = exact_columns(scenario)
     default = first_step(scenario) if exudyn_dt is None else exudyn_dt
     first, note, budget = engine_first_step(scenario, ENGINE, default, REFINEMENT)
-    first = whole_steps(first)
+    first = whole_steps(first, spacing)
     run_kw = {"q0": q0, "q_dot0": q_dot0, **run_kw}
-    exu_runs, info = halved_runs(scenario, t_end, cols, first, OUTPUT_DT, budget=budget,
+    exu_runs, info = halved_runs(scenario, t_end, cols, first, spacing, budget=budget,
                                  log=log, **run_kw)
     gpme_runs = halving_gates.from_refined(refined)
     gpme_runs = replace(gpme_runs, solver_floor=gpme_floors(

@@ -35,6 +35,7 @@ from gpme_io.file_names import named_path
 from gpme_io.runs import resolved_step
 
 from .. import inertia_gate, run_gates
+from ..sampling import compared_output_dt
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from . import cases
@@ -102,13 +103,13 @@ def free_section(scenario, p, log, plots):
     case = f"{FREE}, drive on, {t_end:g} s, RK4 dt = {dt:g} s"
     try:
         refined = run_gates.refined_gpme_runs(free.system, free.q0, free.q_dot0, t_end, dt,
-                                              cases.OUTPUT_DT)
+                                              compared_output_dt(t_end, dt))
     except GpmeError as exc:
         row = compare(ENGINE, free.name, f"{FREE}: not compared", case, [0.0], [0.0],
                       _info(f"the free motion cannot be run to {t_end:g} s: {exc}"), ["-"])
         return _tag([row], "free", "all", "not run")
     case = f"{FREE}, drive on, {t_end:g} s, RK4 dt = {refined.dt:g} s"
-    mj = runs.free_run(free, t_end, refined.dt, cases.OUTPUT_DT)
+    mj = runs.free_run(free, t_end, refined.dt, compared_output_dt(t_end, dt))
     plots[("free", free.name)] = (free.model, refined.coarse, mj)
     log(f"free {free.name}: gpme {refined.coarse.attrs['wall_time_s']:.1f} s, mujoco "
         f"{mj.attrs['wall_time_s']:.1f} s")
@@ -119,8 +120,9 @@ def exact_section(scenario, p, log, plots):
     """Rows, and the gpme RefinedRuns and start (for the mechanism section)."""
     t_end, dt = p.t_end(scenario), _dt(scenario)
     q0, qd0 = cases.on_manifold(scenario)
-    refined = run_gates.refined_gpme_runs(scenario.system, q0, qd0, t_end, dt, cases.OUTPUT_DT)
-    mj = runs.programmed_run(scenario, t_end, refined.dt, cases.OUTPUT_DT, q0=q0, q_dot0=qd0)
+    spacing = compared_output_dt(t_end, dt)
+    refined = run_gates.refined_gpme_runs(scenario.system, q0, qd0, t_end, dt, spacing)
+    mj = runs.programmed_run(scenario, t_end, refined.dt, spacing, q0=q0, q_dot0=qd0)
     plots[("exact", scenario.name)] = (scenario.model, refined.coarse, mj)
     case = f"{EXACT}, on-manifold start, {t_end:g} s, RK4 dt = {refined.dt:g} s"
     names = list(scenario.system.constraint_names)
@@ -136,7 +138,8 @@ def _mechanism_run(scenario, programme, dt, timeconst, t_end, q0, qd0, yoke_time
     mj = mujoco.MjModel.from_xml_string(mjcf_text(model, dt, scenario.constraints, settings))
     p_e, v_e = mech.frame_motion(model, programme.frame, q0, qd0)
     aux = mech.auxiliary_state(programme, p_e, v_e, 0.0)
-    return simulate_mujoco(mj, model, t_end, q0, qd0, cases.OUTPUT_DT, programme=programme,
+    return simulate_mujoco(mj, model, t_end, q0, qd0, compared_output_dt(t_end, dt),
+                           programme=programme,
                            aux=aux)
 
 
@@ -208,7 +211,7 @@ def off_manifold_section(scenario, programme, p, log, plots):
     model = scenario.model
     t_end, dt = p.t_end(scenario), _dt(scenario)
     alpha = scenario.system.alpha
-    g = simulate(scenario.system, t_end, *start, dt=dt, output_dt=cases.OUTPUT_DT)
+    g = simulate(scenario.system, t_end, *start, dt=dt, output_dt=compared_output_dt(t_end, dt))
     variants = {"timeconst = dt": _mechanism_run(scenario, programme, dt, dt, t_end, *start),
                 f"timeconst = 1/alpha = {1 / alpha:g} s":
                     _mechanism_run(scenario, programme, dt, 1.0 / alpha, t_end, *start,

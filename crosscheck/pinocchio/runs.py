@@ -35,6 +35,7 @@ from gpme_io.runs import resolved_step
 
 from .. import run_gates
 from ..compare import Tolerance, compare
+from ..sampling import COMPARED_DT, compared_output_dt
 from ..constraint_reference import evaluate_reference, reference_constraints
 from .model import from_gpme
 
@@ -43,7 +44,8 @@ LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 EXACT = "exact programmed run"
 FREE = "free run"
 QUICK_T_END = 0.2          # s, run length of the quick (CI) section
-OUTPUT_DT = 1e-2           # s, spacing of the compared samples
+OUTPUT_DT = COMPARED_DT    # s, spacing of the compared samples (shorter runs:
+#                            crosscheck.sampling.compared_output_dt)
 
 
 class _Stage:
@@ -230,10 +232,11 @@ def run_section(scenario, quick: bool, log=None, refined=None, pin_system=None) 
         return [compare(ENGINE, scenario.name, f"{EXACT}: not run", f"{t_end:g} s, RK4 dt = "
                         f"{dt:.3g} s", [0.0], [0.0], Tolerance(np.inf, 0.0, f"information: {skip}"),
                         ["-"])]
+    spacing = compared_output_dt(t_end, dt)
     if refined is None:
         refined = run_gates.refined_gpme_runs(scenario.system, scenario.q0, scenario.q_dot0,
-                                              t_end, dt, OUTPUT_DT)
-    df = programmed_run(scenario, t_end, refined.dt, OUTPUT_DT, pin_system)
+                                              t_end, dt, spacing)
+    df = programmed_run(scenario, t_end, refined.dt, spacing, pin_system)
     case = f"{EXACT}, {t_end:g} s, RK4 dt = {refined.dt:g} s"
     rows = run_gates.run_rows(ENGINE, scenario, refined, df, exact_columns(scenario), EXACT, case)
     rows.append(kkt_row(scenario, pin_system))
