@@ -133,3 +133,25 @@ def test_the_run_matches_the_published_reference_to_its_precision(runs):
         ref = np.asarray(ref)
         mixed = np.abs(value - ref) / (1.0 + np.abs(ref))
         assert mixed.max() <= 10.0 ** -REFERENCE_DIGITS, mixed.tolist()
+
+
+def test_the_model_file_is_the_mechanism(system, rng):
+    """examples/andrews/andrews_squeezer.toml (the written URDF, the motor, the spring, the
+    loops and the start in the model file) builds the model of gpme_examples.andrews: the
+    same terms and rows at random states, the same start (to its 17 printed digits) and
+    the same dependent coordinates."""
+    from pathlib import Path
+    from gpme_io.modelfile import load_model_file
+    sc = load_model_file(Path(__file__).resolve().parents[1] / "examples" / "andrews"
+                         / "andrews_squeezer.toml")
+    model = system.model
+    assert sc.model.coordinate_names == model.coordinate_names
+    assert sc.system.dependent == system.dependent
+    np.testing.assert_allclose(sc.q0, A.start_state(model)[0], rtol=0, atol=1e-15)
+    for _ in range(5):
+        q, q_dot = rng.uniform(-2, 2, 7), rng.uniform(-5, 5, 7)
+        ours, theirs = dynamics_terms(sc.model, 0.0, q, q_dot), dynamics_terms(model, 0.0, q, q_dot)
+        np.testing.assert_array_equal(ours.M, theirs.M)
+        np.testing.assert_array_equal(ours.h + ours.Q, theirs.h + theirs.Q)
+        np.testing.assert_array_equal(sc.system.constraints(0.0, q, q_dot)[2],
+                                      system.constraints(0.0, q, q_dot)[2])
