@@ -43,6 +43,7 @@ from .accurate_step import run_accurately
 from .compare import CRASH_QUANTITY, Tolerance, compare
 from .constraint_reference import with_reference_frames_of
 from .crane_cases import crane_cases
+from .reference_values import reference_rows
 from .engines import missing_message
 from . import run_store
 from . import rfem_reference
@@ -100,7 +101,7 @@ def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
             scenario_rows = checks(df)
         log.info(f"    wall time {df.attrs['wall_time_s']:.1f} s")
         write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
-        rows += scenario_rows
+        rows += scenario_rows + reference_rows(scenario, df)
         runs.append((scenario, df))
     write_example_outputs(runs, run_dir / "paper")
     df = _with_rfem_rows(rows_frame(rows), rfem_rows)

@@ -62,6 +62,32 @@ class EngineStep:
 
 
 @dataclass(frozen=True)
+class ReferenceValues:
+    """Published values of the motion at one time, which a run must reproduce (a model
+    file's [[reference]]; crosscheck.reference_values makes the report rows).
+
+    key    : the entry's key path in the file ("reference[0]")
+    t      : s, the time of the values (a sample time of the run)
+    values : {column: value}: coordinates (rad or m) by name, velocities as <name>_dot
+    abs    : allowed |run - value| in each group's unit (coordinates, velocities), plus
+    rel    : times the group's largest |value| (normwise, as every tolerance here)
+    source : where the values are published (shown in the rows)
+    reason : why this tolerance holds (the source's stated or demonstrated precision)
+    """
+
+    key: str
+    t: float
+    values: Mapping[str, float]
+    abs: float
+    rel: float
+    source: str
+    reason: str
+
+    def __post_init__(self):
+        object.__setattr__(self, "values", MappingProxyType(dict(self.values)))
+
+
+@dataclass(frozen=True)
 class Scenario:
     """One model and task, ready to run and to compare.
 
@@ -89,6 +115,7 @@ class Scenario:
     example     : the built-in example the scenario is a run of (gpme_examples.paper.EXAMPLE
                   for the paper's crane runs: their figures are added by
                   gpme_io.example_outputs), None for a model file's
+    references  : ReferenceValues, published values the runs are checked against
     """
 
     name: str
@@ -112,6 +139,7 @@ class Scenario:
     yield_strengths: Mapping[str, float] = field(default_factory=dict)
     engine_steps: Mapping[str, EngineStep] = field(default_factory=dict)
     example: Optional[str] = None
+    references: tuple = ()
 
     def __post_init__(self):
         for name in ("q0", "q_dot0"):
@@ -125,6 +153,7 @@ class Scenario:
                            MappingProxyType(dict(self.yield_strengths)))
         object.__setattr__(self, "constraints", tuple(self.constraints))
         object.__setattr__(self, "notes", tuple(self.notes))
+        object.__setattr__(self, "references", tuple(self.references))
 
     @property
     def flexible_coordinates(self):

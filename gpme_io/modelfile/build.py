@@ -181,6 +181,12 @@ def reference_problems(spec: ModelFile, model: Model) -> list:
         out.append(f"constraint: {m} constraints ([[constraint]] + [[programme]]) on "
                    f"{model.n_coordinates} coordinates {list(coords)}; at most one per "
                    "coordinate")
+    for ref in spec.references:
+        for column in ref.values:
+            name = column[:-4] if column.endswith("_dot") and column not in coords else column
+            if name not in coords:
+                key = "q_dot" if name != column else "q"
+                out.append(f"{ref.key}.{key}.{name}: " + _unknown("coordinate", name, coords))
     for name in spec.solver.dependent or ():
         if name not in coords:
             out.append("solver.dependent: " + _unknown("coordinate", name, coords))
@@ -302,7 +308,7 @@ def assemble(spec: ModelFile, source: SourceModel) -> Scenario:
                     source=spec.path, urdf=source.urdf, chain=source.chain,
                     frozen=dict(source.frozen), notes=tuple(notes),
                     tolerances=spec.tolerance_map(), on_constraints=spec.initial.on_constraints,
-                    engine_steps=spec.engine_step_map(),
+                    engine_steps=spec.engine_step_map(), references=spec.references,
                     yield_strengths=_yield_strengths(spec, model))
 
 

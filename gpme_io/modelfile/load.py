@@ -22,7 +22,7 @@ from gpme_core.methods import FIXED_STEP_METHODS
 from gpme_examples.crane import CraneParameters, build_crane
 from gpme_io.input_files import (MODEL_FILE_LIMIT, SIDE_FILE_LIMIT, URDF_LIMIT,
                                  InputFileError, check_input_file, read_input_file)
-from gpme_io.scenario import INTEGRATORS, EngineStep, ToleranceOverride
+from gpme_io.scenario import INTEGRATORS, EngineStep, ReferenceValues, ToleranceOverride
 from gpme_io.xml_text import xml_char_problem
 
 from gpme_io import expressions as ex
@@ -35,10 +35,10 @@ from .schema import (AXES, BUILTIN_MODELS, CONSTRAINT_KINDS, PAIR_KINDS, PAIR_SY
                      SolverSpec, TreeSection, UrdfSource, constraint_rows)
 
 TOP_LEVEL = ("model", "chain", "tree", "flexible", "joint", "drive", "point_spring",
-             "constraint", "programme",
+             "constraint", "programme", "reference",
              "solver", "initial", "run", "tolerance", "engine_step")
 ARRAYS_OF_TABLES = ("flexible", "joint", "drive", "point_spring", "constraint", "programme",
-                    "tolerance",
+                    "tolerance", "reference",
                     "engine_step")
 ROBOT_DATA_PREFIX = "example-robot-data:"
 ROBOT_DATA_DISTRIBUTION = "example-robot-data"
@@ -313,6 +313,8 @@ def parse_model_data(data: dict, path: Path) -> tuple:
                        if (t := _tolerance(c, e, f"tolerance[{k}]")) is not None)
     _unique(c, [(f"tolerance[{k}]", t.check) for k, t in enumerate(tolerances)], "check",
             "tolerance")
+    references = tuple(x for k, e in enumerate(entries["reference"])
+                       if (x := _reference(c, e, f"reference[{k}]", t_end)) is not None)
     engine_steps = tuple(x for k, e in enumerate(entries["engine_step"])
                          if (x := _engine_step(c, e, f"engine_step[{k}]", t_end)) is not None)
     _unique(c, [(f"engine_step[{k}]", x.engine) for k, x in enumerate(engine_steps)],
@@ -322,6 +324,7 @@ def parse_model_data(data: dict, path: Path) -> tuple:
                    drives=drives, point_springs=point_springs, constraints=constraints,
                    programmes=programmes,
                    solver=solver, initial=initial, run=run, tolerances=tolerances,
+                   references=references,
                    engine_steps=engine_steps)
     return mf, c.problems
 
@@ -950,6 +953,28 @@ def _engine_step(c: _Checker, e: dict, path: str, t_end) -> Optional[EngineStep]
     if len(c.problems) > n0:
         return None
     return EngineStep(engine, dt, reason, halvings)
+
+
+def _reference(c: _Checker, e: dict, path: str, t_end) -> Optional[ReferenceValues]:
+    """[[reference]]: published values of the motion at time t (docs/models.md)."""
+    c.keys(e, ("t", "q", "q_dot", "abs", "rel", "source", "reason"), path)
+    n0 = len(c.problems)
+    t = c.number(e, "t", path, "s, the time of the published values", rule=">=0")
+    if t is not None and t_end is not None and t > t_end:
+        c.add(f"{path}.t", f"{t:g} s is after the run's end t_end = {t_end:g} s")
+    values = dict(c.number_map(e, "q", path, "rad or m"))
+    values.update({f"{k}_dot": v for k, v in c.number_map(e, "q_dot", path,
+                                                          "rad/s or m/s").items()})
+    if not values and "q" not in e and "q_dot" not in e:
+        c.add(path, "give the published values: q = {coordinate = value} and/or q_dot = "
+              "{coordinate = value}")
+    tol_abs = c.number(e, "abs", path, "the values' units", rule=">=0")
+    tol_rel = c.number(e, "rel", path, "relative to the largest value", rule=">=0")
+    source = c.string(e, "source", path, "where the values are published")
+    reason = c.string(e, "reason", path, "why the tolerance holds")
+    if len(c.problems) > n0:
+        return None
+    return ReferenceValues(path, t, values, tol_abs, tol_rel, source, reason)
 
 
 def _tolerance(c: _Checker, e: dict, path: str) -> Optional[ToleranceOverride]:

@@ -318,6 +318,7 @@ class ModelFile:
     initial: InitialSpec = InitialSpec()
     run: Optional[RunSpec] = None
     tolerances: tuple = ()      # ToleranceOverride, in file order
+    references: tuple = ()      # gpme_io.scenario.ReferenceValues, in file order
     engine_steps: tuple = ()    # EngineStep, in file order
 
     @property
