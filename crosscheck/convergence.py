@@ -62,6 +62,8 @@ from typing import Callable, Mapping, Optional, Sequence
 
 import numpy as np
 
+from gpme_core.errors import SimulationError
+
 ORDER_TOLERANCE = 1.0    # |p_obs - p| <= 1 (the ratio within a factor 2 of 2^p)
 RESOLVED = 10.0          # a difference counts when above this many round-off floors
 WINDOW = 1               # samples each side of the local window
@@ -295,10 +297,26 @@ def refine(run_at: Callable[[float], object], dt: float, columns: Sequence[str],
     dt: s, the first coarsest step; floors_of(runs) -> {column: floor}; first: the three
     first runs when already made.  While the runs are not converged (:class:`Convergence`)
     and the budget allows, h is halved: the coarsest run is dropped and one at the new
-    h/4 added."""
+    h/4 added.  A first run that fails (SimulationError: the engine's solver gave up) halves
+    the first step within the same budget."""
     log = log or (lambda msg: None)
-    runs = list(first) if first is not None else [run_at(dt / k) for k in (1, 2, 4)]
     steps, reasons = [dt], []
+    while first is None:
+        # an engine's own solver may fail outright at a step too coarse for the model (a
+        # Newton iteration that does not converge: a fast-turning mechanism at a step that
+        # turns it by a radian); that is the step's fault, not a discrepancy: halve it, as
+        # for a run that is not converged, within the same budget
+        try:
+            first = [run_at(dt / k) for k in (1, 2, 4)]
+        except SimulationError as exc:
+            if len(steps) - 1 >= budget.max_halvings:
+                raise SimulationError(f"{exc} (also after {len(steps) - 1} halvings of the "
+                                      f"first step, to {dt:.3g} s)") from exc
+            reasons.append(f"h = {dt:.3g} s: a run failed ({str(exc)[:160]})")
+            log(f"halving the step: {reasons[-1]}")
+            dt /= 2.0
+            steps.append(dt)
+    runs = list(first)
     while True:
         conv = convergence(runs, columns, floors_of(tuple(runs)), order, compared)
         if conv.converged:

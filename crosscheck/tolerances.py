@@ -33,12 +33,13 @@ _SOLVE = ("linear solve with M (aba in Pinocchio, Cholesky in gpme): forward err
           "n = 10); tol_rel = max(1e-12, 8 sqrt(n) eps cond_2(M)) (sqrt(n): 2-norm to max-entry "
           "error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, n = {n}")
 _SOLVE_CONSTRAINED = (
-    "constrained solve: Pinocchio's forwardDynamics (Cholesky of M, then of A M^-1 A^T), "
-    "error ~eps cond(M); gpme's reduced GPME solves L = [N^T M; A] (N = [I; Gamma], Gamma = "
-    "-A_dc^-1 A_ic), error ~eps cond(L), and cond(L) exceeds cond(M) where Gamma is large; "
-    "tol_rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))) (sqrt(n): 2-norm to "
-    "max-entry error; x2 two engines, x4 margin), here cond(M) = {cond:.1e}, "
-    "cond(L) = {cond_l:.1e}, n = {n}")
+    "constrained solve: Pinocchio's forwardDynamics (Cholesky of M, then of the Delassus "
+    "matrix D = A M^-1 A^T), error ~eps max(cond(M), cond(D)); gpme's reduced GPME solves "
+    "L = [N^T M; A] (N = [I; Gamma], Gamma = -A_dc^-1 A_ic), error ~eps cond(L), and cond(L) "
+    "exceeds cond(M) where Gamma is large; tol_rel = max(1e-12, 8 sqrt(n) eps "
+    "max(cond_2(M), cond_2(L), cond_2(D))) (sqrt(n): 2-norm to max-entry error; x2 two "
+    "engines, x4 margin), here cond(M) = {cond:.1e}, cond(L) = {cond_l:.1e}, "
+    "cond(D) = {cond_d:.1e}, n = {n}")
 _MULTIPLIER = ("; lambda = A_dc^-T F_dc inherits the reaction error: tol_abs = tol_rel "
                "max|A^T lambda| ||A_dc^-T||_inf = {tol:.1e}")
 # Each tolerance: abs (in the quantity's unit, a floor for exact zeros such as h at rest)
@@ -77,8 +78,9 @@ def solve_tolerances(m: NDArray[np.float64], reactions: NDArray[np.float64],
     m (n, n) mass matrix, reactions (n,) A^T lambda (N, N m), a (k, n) constraint
     Jacobian, ic / dc index arrays of the independent / dependent coordinates.
     free q_ddot: rel = max(1e-12, 8 sqrt(n) eps cond_2(M)).  Constrained q_ddot, reactions
-    and multipliers: rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L))), L the reduced GPME
-    matrix (:func:`reduced_matrix`); the multipliers get abs = rel max|A^T lambda|
+    and multipliers: rel = max(1e-12, 8 sqrt(n) eps max(cond_2(M), cond_2(L), cond_2(D))), L
+    the reduced GPME matrix (:func:`reduced_matrix`), D = A M^-1 A^T the Delassus matrix of
+    Pinocchio's solve; the multipliers get abs = rel max|A^T lambda|
     ||A_dc^-T||_inf as well, because lambda = A_dc^-T (A^T lambda)_dc can be small beside
     the reactions.
     """
@@ -91,8 +93,12 @@ def solve_tolerances(m: NDArray[np.float64], reactions: NDArray[np.float64],
     if a.shape[0] == 0:
         return out
     cond_l = float(np.linalg.cond(reduced_matrix(m, a, ic, dc)))
-    rel_c = max(1e-12, factor * max(cond, cond_l))
-    reason = _SOLVE_CONSTRAINED.format(cond=cond, cond_l=cond_l, n=n)
+    # the Delassus matrix Pinocchio's forwardDynamics factorises (Andrews' mechanism at a
+    # random state: cond(M) = 94, cond(L) = 220, cond(D) = 2.1e5, and the engines differ
+    # by 2.1e-12 of max|q_ddot|, above eps cond(L) but well inside eps cond(D))
+    cond_d = float(np.linalg.cond(a @ np.linalg.solve(m, a.T)))
+    rel_c = max(1e-12, factor * max(cond, cond_l, cond_d))
+    reason = _SOLVE_CONSTRAINED.format(cond=cond, cond_l=cond_l, cond_d=cond_d, n=n)
     lam_abs = rel_c * float(np.max(np.abs(reactions))) * float(
         np.linalg.norm(np.linalg.inv(a[:, dc]).T, np.inf))
     out.update({

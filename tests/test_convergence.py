@@ -216,3 +216,25 @@ def test_a_crossing_that_moves_with_the_step_is_not_a_failure(monkeypatch):
     assert np.all(np.abs(runs[2]["x"] - exact(T)) <= bound)
     monkeypatch.setattr(conv_module, "CROSSING_WINDOW", 1)
     assert not convergence(runs, ["x"], FLOOR, 2.0, FINEST).converged
+
+
+def test_a_solver_failure_at_the_first_step_halves_it():
+    """An engine whose solver gives up at a step too coarse for the model (SimulationError)
+    is run again at half the step, within the budget, and then converges; past the budget
+    the failure is raised with the halvings tried."""
+    from gpme_core.errors import SimulationError
+
+    def fails_above(limit):
+        def run_at(step):
+            if step > limit:
+                raise SimulationError(f"Newton failed at h = {step:g} s")
+            return run(step)
+        return run_at
+
+    runs, h, conv, record = refine(fails_above(H / 3.0), H, ["x"], lambda r: FLOOR, 2.0,
+                                   FINEST, RefinementBudget(8, 60.0))
+    assert conv.converged and h == pytest.approx(H / 4.0)
+    assert len(record.reasons) == 2 and "a run failed" in record.reasons[0]
+    with pytest.raises(SimulationError, match="after 2 halvings of the first step"):
+        refine(fails_above(H / 100.0), H, ["x"], lambda r: FLOOR, 2.0, FINEST,
+               RefinementBudget(2, 60.0))
