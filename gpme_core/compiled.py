@@ -9,7 +9,8 @@ cannot be compiled).  What compiles:
   straight-line code after SymPy's common-subexpression elimination, compiled by numba
   once);
 * time functions of programmes and drives: Constant, Cosine, Sine, QuinticRamp,
-  Tabulated and SympyTimeFunction (generated the same way).
+  Tabulated and SympyTimeFunction (generated the same way);
+* point springs (gpme_core.point_springs), their ends in the same table of points.
 
 Anything else (a PointConstraint or TimeFunction subclass of the user's, a drive given as
 a plain Python callable) keeps the Python path: gpme_core.integrate uses it and says why.
@@ -112,10 +113,6 @@ def pack(system):
     """(md, cd, UserCode) of ``system`` for gpme_core.kernels (layout in its docstring);
     NotCompilable names the first part that cannot be compiled."""
     model = system.model
-    if model.point_springs:
-        raise NotCompilable(f"the model has point springs "
-                            f"{[s.name for s in model.point_springs]}, which the compiled "
-                            "kernels do not evaluate yet (gpme_core.point_springs)")
     tables = _Tables()
     m = system.n_constraints
     c_kind = np.zeros(m, dtype=np.int64)
@@ -165,16 +162,28 @@ def pack(system):
     for d in model.drives:
         d_coord.append(model.index(d.joint))
         d_fun.append(tables.time_function(d.function, f"the drive on {d.joint!r}"))
+    s_a, s_b, s_par = [], [], []
+    for spring in model.point_springs:
+        fr = model.frame(spring.frame)
+        s_a.append(tables.point(fr.link_index, fr.transform[:3, 3]))
+        if isinstance(spring.anchor, str):
+            fb = model.frame(spring.anchor)
+            s_b.append(tables.point(fb.link_index, fb.transform[:3, 3]))
+            anchor = (0.0, 0.0, 0.0)
+        else:
+            s_b.append(-1)
+            anchor = tuple(float(v) for v in spring.anchor)
+        s_par += [spring.stiffness, spring.free_length, spring.damping, *anchor]
     p_link = [k[0] for k in tables.points]
     p_r = [v for k in tables.points for v in (*k[1], k[2])]
     f_par = [v for p in tables.f_par for v in p]
-    ints = ([m, len(p_link), len(tables.f_kind), len(d_coord)] + c_kind.tolist()
+    ints = ([m, len(p_link), len(tables.f_kind), len(d_coord), len(s_a)] + c_kind.tolist()
             + c_point.tolist() + c_fun.tolist() + c_point_b.tolist() + p_link
             + tables.f_kind + tables.f_off
-            + d_coord + d_fun)
+            + d_coord + d_fun + s_a + s_b)
     cd = (np.array(ints, dtype=np.int64),
           np.concatenate([c_par.ravel(), np.array(p_r, dtype=float),
-                          np.array(f_par, dtype=float)]))
+                          np.array(s_par, dtype=float), np.array(f_par, dtype=float)]))
     mats = np.ascontiguousarray(np.stack([model.origins, model.generators,
                                           model.pseudo_inertias]), dtype=float)
     vecs = np.ascontiguousarray(np.stack([model.is_revolute.astype(float), model.stiffness,

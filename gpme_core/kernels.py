@@ -24,11 +24,15 @@ gpme_core.compiled.pack):
           is_revolute (0/1), stiffness, spring_reference, damping, lower_limits,
           upper_limits; gamma (4,); parents (n,) int64; moves (n, n) bool: the tree,
           gpme_core.fast)                                -> :func:`model_parts`
-    cd = (ci int64: m, P, F, D, c_kind (m), c_point (m), c_fun (m), c_point_b (m),
-          p_link (P), f_kind (F), f_off (F), d_coord (D), d_fun (D); cf float: c_par
-          (m, 4), p_r (P, 4) (vector in the link frame, m or 1, and its homogeneous w: 1 a
-          point, 0 a direction), f_par)                  -> :func:`constraint_parts`
-         (c_point_b: the second vector of a pair constraint, -1 for the others)
+    cd = (ci int64: m, P, F, D, S, c_kind (m), c_point (m), c_fun (m), c_point_b (m),
+          p_link (P), f_kind (F), f_off (F), d_coord (D), d_fun (D), s_a (S), s_b (S); cf
+          float: c_par (m, 4), p_r (P, 4) (vector in the link frame, m or 1, and its
+          homogeneous w: 1 a point, 0 a direction), s_par (S, 6), f_par)
+                                                         -> :func:`constraint_parts`
+         (c_point_b: the second vector of a pair constraint, -1 for the others; the point
+         springs, gpme_core.point_springs: s_a, s_b their ends in the vector table, s_b -1
+         for a world anchor, s_par = (stiffness N/m, free length m, damping N s/m, anchor
+         (3,) m))
     opts = float array (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
            divergence_limit)
 
@@ -120,10 +124,10 @@ def model_parts(md):
 @_jit
 def constraint_parts(cd):
     """(c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun,
-    c_point_b) views of cd (module docstring)."""
+    c_point_b, s_a, s_b, s_par) views of cd (module docstring)."""
     ci, cf = cd
-    m, n_points, n_fun, n_drive = ci[0], ci[1], ci[2], ci[3]
-    o = 4
+    m, n_points, n_fun, n_drive, n_spring = ci[0], ci[1], ci[2], ci[3], ci[4]
+    o = 5
     c_kind = ci[o:o + m]
     c_point = ci[o + m:o + 2 * m]
     c_fun = ci[o + 2 * m:o + 3 * m]
@@ -136,11 +140,16 @@ def constraint_parts(cd):
     o += 2 * n_fun
     d_coord = ci[o:o + n_drive]
     d_fun = ci[o + n_drive:o + 2 * n_drive]
+    o += 2 * n_drive
+    s_a = ci[o:o + n_spring]
+    s_b = ci[o + n_spring:o + 2 * n_spring]
     c_par = cf[:4 * m].reshape((m, 4))
     p_r = cf[4 * m:4 * m + 4 * n_points].reshape((n_points, 4))
-    f_par = cf[4 * m + 4 * n_points:]
+    o = 4 * m + 4 * n_points
+    s_par = cf[o:o + 6 * n_spring].reshape((n_spring, 6))
+    f_par = cf[o + 6 * n_spring:]
     return (c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun,
-            c_point_b)
+            c_point_b, s_a, s_b, s_par)
 
 
 @_jit
@@ -211,8 +220,8 @@ def _local_terms(kind, par, fun, f_kind, f_off, f_par, p, t, out, tf):
 def constraint_rows(t, q, q_dot, t_all, s_all, moves, cd, phi, phi_dot, a, kappa, ws):
     """Phi (m,), Phi_dot (m,), A (m, n), kappa (m,) into the given arrays; False when a
     value is not finite.  ws: float scratch of rows_scratch_size(n, n_points)."""
-    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _, c_point_b = \
-        constraint_parts(cd)
+    c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, _, _, c_point_b, \
+        _, _, _ = constraint_parts(cd)
     m = c_kind.shape[0]
     n = q.shape[0]
     n_points = p_link.shape[0]
@@ -555,12 +564,62 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
     return OK, rel
 
 
+# floats of the point springs' scratch in evaluate: two ends' position, velocity, drift (3
+# each) and Jacobian (3 x n), the direction's row (n), and point_into's own scratch
+SPRING_SCRATCH_PER_N = 7
+SPRING_SCRATCH = 18 + POINT_SCRATCH
+
+
+@_jit
+def _point_springs(t_all, s_all, moves, q_dot, p_link, p_r, s_a, s_b, s_par, paper_eq7, rhs,
+                   ws):
+    """Subtract the point springs' generalized forces (gpme_core.point_springs: elastic
+    k (L - L0) and damping c L_dot along e, mapped by e^T (J_a - J_b)) from rhs (n,); the
+    damping part twice with paper_eq7, as gpme_core.gpme does.  Returns the power the
+    dampers dissipate (W), NaN where a spring's two points meet."""
+    n = q_dot.shape[0]
+    pa, va, da = ws[0:3], ws[3:6], ws[6:9]
+    pb, vb, db = ws[9:12], ws[12:15], ws[15:18]
+    ja = ws[18:18 + 3 * n].reshape((3, n))
+    jb = ws[18 + 3 * n:18 + 6 * n].reshape((3, n))
+    row = ws[18 + 6 * n:18 + 7 * n]
+    scratch = ws[18 + 7 * n:18 + 7 * n + POINT_SCRATCH]
+    power = 0.0
+    for s in range(s_a.shape[0]):
+        a, b = s_a[s], s_b[s]
+        point_into(t_all, s_all, moves, q_dot, p_link[a], p_r[a], 1.0, pa, va, ja, da, scratch)
+        if b >= 0:
+            point_into(t_all, s_all, moves, q_dot, p_link[b], p_r[b], 1.0, pb, vb, jb, db,
+                       scratch)
+        else:
+            for i in range(3):
+                pb[i], vb[i] = s_par[s, 3 + i], 0.0
+                for j in range(n):
+                    jb[i, j] = 0.0
+        dx, dy, dz = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if not length > 1e-12:
+            return np.nan
+        ex, ey, ez = dx / length, dy / length, dz / length
+        rate = ex * (va[0] - vb[0]) + ey * (va[1] - vb[1]) + ez * (va[2] - vb[2])
+        elastic = s_par[s, 0] * (length - s_par[s, 1])
+        damper = s_par[s, 2] * rate
+        force = elastic + (2.0 * damper if paper_eq7 != 0.0 else damper)
+        for j in range(n):
+            row[j] = ex * (ja[0, j] - jb[0, j]) + ey * (ja[1, j] - jb[1, j]) \
+                + ez * (ja[2, j] - jb[2, j])
+            rhs[j] -= force * row[j]
+        power += damper * rate
+    return power
+
+
 @_jit
 def workspace_size(n, k, n_points):
     """Length of the float workspace of :func:`evaluate` (n coordinates, k constraints,
     n_points distinct constrained points)."""
     return (32 * n + 32 + terms_scratch_size(n) + n * n + 3 * n + 3 + 5 * k + k * n
-            + rows_scratch_size(n, n_points) + reduced_scratch_size(n, k))
+            + rows_scratch_size(n, n_points) + reduced_scratch_size(n, k)
+            + SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH)
 
 
 @_jit
@@ -570,7 +629,8 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
     origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _, \
         parents, moves = model_parts(md)
-    _, _, _, _, _, _, f_kind, f_off, f_par, d_coord, d_fun, _ = constraint_parts(cd)
+    _, _, _, _, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun, _, s_a, s_b, s_par = \
+        constraint_parts(cd)
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
     n = q.shape[0]
@@ -604,6 +664,14 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
         time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
         rhs[d_coord[i]] += tf[0]
         w_drive += q_dot[d_coord[i]] * tf[0]
+    if s_a.shape[0]:
+        size = SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH
+        w_spring = _point_springs(t_all, s_all, moves, q_dot, p_link, p_r, s_a, s_b, s_par,
+                                  paper_eq7, rhs, ws[used:used + size])
+        if not math.isfinite(w_spring):
+            return NOT_FINITE
+        w_diss += w_spring
+    used += SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH
     info[0], info[1], info[2], info[3], info[4] = 1.0, w_diss, w_drive, 0.0, 0.0
     if not (math.isfinite(w_drive)):
         return NOT_FINITE
