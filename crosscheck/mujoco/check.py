@@ -15,6 +15,9 @@ crosscheck.compare.compare; docs/crosscheck-mujoco.md):
                   auxiliary mechanism, a second, approximate realisation.  The differences
                   are information; the gated rows require them to shrink as the soft
                   constraint's tc^2 law says when timeconst and dt are halved.
+4b. loops       : only when every constraint is a loop closure MuJoCo writes itself
+                  (crosscheck.mujoco.loops: <connect>, <weld>): its own soft equalities,
+                  gated by the same tc^2 law; otherwise one information row says why.
 5. off-manifold : the rigid crane from the paper's start off the constraints, Baumgarte
                   against MuJoCo's constraint stabilisation; information only.
 6. wall time    : information.
@@ -39,6 +42,7 @@ from ..sampling import compared_output_dt
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare
 from . import cases
+from . import loops as mj_loops
 from . import mechanism as mech
 from . import runs
 from .mjcf import mjcf_text
@@ -146,36 +150,64 @@ def _mechanism_run(scenario, programme, dt, timeconst, t_end, q0, qd0, yoke_time
 def mechanism_section(scenario, programme, refined, start, p, log, plots):
     """MuJoCo's auxiliary mechanism at (dt, tc = dt) and (dt/2, tc/2) against gpme at dt/4:
     absolute differences as information, their ratio gated by MECHANISM_RATIO."""
+    settings = [(refined.dt / 2 ** k, refined.dt / 2 ** k) for k in range(cases.MECHANISM_STEPS)]
+    mjs = [_mechanism_run(scenario, programme, dt, tc, refined.t_end, *start)
+           for dt, tc in settings]
+    plots[("mechanism", scenario.name)] = (scenario.model, refined.finest, mjs[-1])
+    names = list(scenario.model.coordinate_names) + list(scenario.system.constraint_names)
+    rows, table = soft_rows(scenario, refined, settings, mjs, "mechanism",
+                            "soft-equality mechanism", names)
+    log(f"mechanism {scenario.model.name}: {len(settings)} settings")
+    return rows, table
+
+
+def loops_section(scenario, loops, refined, start, p, log, plots):
+    """The loops closed by MuJoCo's own <connect>/<weld> equalities (crosscheck.mujoco.loops)
+    at (dt, tc = dt) and (dt/2, tc/2) against gpme at dt/4, gated as the mechanism is."""
+    settings = [(refined.dt / 2 ** k, refined.dt / 2 ** k) for k in range(cases.MECHANISM_STEPS)]
+    spacing = compared_output_dt(refined.t_end, _dt(scenario))
+    mjs = [mj_loops.loop_run(scenario, loops, dt, tc, refined.t_end, *start, spacing)
+           for dt, tc in settings]
+    plots[("loops", scenario.name)] = (scenario.model, refined.finest, mjs[-1])
+    rows, table = soft_rows(scenario, refined, settings, mjs, "loops",
+                            "MuJoCo's own loop equalities (" + mj_loops.describe(loops) + ")",
+                            list(scenario.model.coordinate_names))
+    log(f"loops {scenario.model.name}: {len(settings)} settings")
+    return rows, table
+
+
+def soft_rows(scenario, refined, settings, mjs, section, what, columns):
+    """Rows of MuJoCo's soft equality constraints at ``settings`` [(dt, timeconst)] (runs
+    ``mjs``) against gpme's finest run: the differences of ``columns`` as information, and
+    per coordinate the ratio of the differences at tc/2 and tc gated by MECHANISM_RATIO
+    (the soft constraint's tc^2 law) where the coarse difference is resolved above
+    round-off; and the convergence table."""
     model, t_end = scenario.model, refined.t_end
     g = refined.finest
-    settings = [(refined.dt / 2 ** k, refined.dt / 2 ** k) for k in range(cases.MECHANISM_STEPS)]
-    mjs = [_mechanism_run(scenario, programme, dt, tc, t_end, *start) for dt, tc in settings]
-    plots[("mechanism", scenario.name)] = (model, g, mjs[-1])
     names = list(model.coordinate_names)
-    cons = list(scenario.system.constraint_names)
     rows, table = [], []
     times = [f"t={t:.4g}" for t in g["t"]]
     for (dt, tc), mj in zip(settings, mjs):
-        case = f"soft-equality mechanism, dt = timeconst = {tc:g} s, {t_end:g} s"
+        case = f"{what}, dt = timeconst = {tc:g} s, {t_end:g} s"
         entry = {"model": model.name, "dt [s]": dt, "timeconst [s]": tc}
-        for c in names + cons:
-            r = compare(ENGINE, model.name, f"mechanism {c} max |difference| over time", case,
+        for c in columns:
+            r = compare(ENGINE, model.name, f"{section} {c} max |difference| over time", case,
                         g[c].to_numpy(), mj[c].to_numpy(),
                         _info("MuJoCo's soft equality constraints lag by ~tc^2 (see the "
                               "convergence rows); gpme reference at dt/4"), times)
-            rows += _tag([r], "mechanism", c, "max |gpme - mujoco mechanism|")
+            rows += _tag([r], section, c, f"max |gpme - mujoco {section}|")
             entry[f"max |d {c}|"] = r["abs_error"]
         for c in [c for c in mj.columns if c.startswith("viol_")]:
-            r = compare(ENGINE, model.name, f"mechanism {c} max over time [m]", case, [0.0],
-                        [np.abs(mj[c]).max()], _info("auxiliary constraint violation (MuJoCo "
+            r = compare(ENGINE, model.name, f"{section} {c} max over time [m]", case, [0.0],
+                        [np.abs(mj[c]).max()], _info("equality constraint violation (MuJoCo "
                                                      "only); its effect is the differences"),
                         ["max"])
-            rows += _tag([r], "mechanism", c, "auxiliary constraint violation")
+            rows += _tag([r], section, c, "equality constraint violation")
         entry["mujoco wall s per simulated s"] = mj.attrs["wall_time_s"] / t_end
         table.append(entry)
     coarse, fine = mjs[0], mjs[-1]
     n_steps = int(round(t_end / settings[-1][0]))
-    case = (f"soft-equality mechanism, timeconst and dt {settings[0][1]:g} -> {settings[-1][1]:g} s, "
+    case = (f"{what}, timeconst and dt {settings[0][1]:g} -> {settings[-1][1]:g} s, "
             f"{t_end:g} s")
     state_scale = float(np.abs(g[names].to_numpy(float)).max(initial=0.0))
     for c in names:
@@ -194,10 +226,9 @@ def mechanism_section(scenario, programme, refined, start, p, log, plots):
         tol = cases.MECHANISM_RATIO if d_coarse > cases.MECHANISM_RESOLVED * floor else _info(
             f"the coarse difference {d_coarse:.1e} is within {cases.MECHANISM_RESOLVED:g} "
             f"round-off floors ({floor:.1e}): no convergence can be observed")
-        r = compare(ENGINE, model.name, f"mechanism {c} difference ratio, tc/2 over tc", case,
+        r = compare(ENGINE, model.name, f"{section} {c} difference ratio, tc/2 over tc", case,
                     [ratio if np.isfinite(ratio) else 0.0], [0.0], tol, ["ratio"])
-        rows += _tag([r], "mechanism", c, "difference ratio (fine / coarse)")
-    log(f"mechanism {model.name}: {len(settings)} settings")
+        rows += _tag([r], section, c, "difference ratio (fine / coarse)")
     return rows, pd.DataFrame(table)
 
 
@@ -276,6 +307,15 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
         rows += free_section(s, p, log, plots)
         exact_rows, refined, start_state = exact_section(s, p, log, plots)
         rows += exact_rows
+        loops, why = mj_loops.native_loops(s)
+        if loops:
+            loop_rows, table = loops_section(s, loops, refined, start_state, p, log, plots)
+            rows += loop_rows
+            tables.append(table)
+        elif why:
+            rows += _tag([compare(ENGINE, s.name, "loops: not compared", "MuJoCo's own loop "
+                                  "equalities", [0.0], [0.0], _info(why), ["-"])],
+                         "loops", "all", "not compared")
         prog = cases.programme(s)
         if prog is not None:
             mech_rows, table = mechanism_section(s, prog, refined, start_state, p, log, plots)

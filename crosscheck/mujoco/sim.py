@@ -91,12 +91,15 @@ def crane_energies(mj_model, data, cmap, dense):
 
 
 def equality_violations(mj_model, data):
-    """{name: violation} of every equality (m: norm of a connect's site gap; tendon:
-    length minus its held length)."""
+    """{name: violation} of every equality (m: norm of a connect's or weld's site gap;
+    tendon: length minus its held length; NaN for another kind, which the harness does not
+    write)."""
     out = {}
     for e in range(mj_model.neq):
         name = mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_EQUALITY, e)
-        if mj_model.eq_type[e] == mujoco.mjtEq.mjEQ_CONNECT:
+        out[name] = np.nan
+        if int(mj_model.eq_type[e]) in (int(mujoco.mjtEq.mjEQ_CONNECT),
+                                        int(mujoco.mjtEq.mjEQ_WELD)):
             s1, s2 = mj_model.eq_obj1id[e], mj_model.eq_obj2id[e]
             out[name] = float(np.linalg.norm(data.site_xpos[s1] - data.site_xpos[s2]))
         elif mj_model.eq_type[e] == mujoco.mjtEq.mjEQ_TENDON:
