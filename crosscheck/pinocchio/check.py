@@ -48,6 +48,7 @@ from tqdm import tqdm
 
 from gpme_core.errors import GpmeError, OutputWriteError
 from gpme_core.gpme import ProgrammedMotion
+from gpme_core import transforms as tf
 from gpme_core.kinematics import chain_kinematics, point_kinematics
 from gpme_io.atomic import atomic_write_text
 from gpme_io.file_names import named_path
@@ -57,7 +58,7 @@ from gpme_io.urdf_writer import link_own_frame
 
 from ..crane_cases import crane_cases
 from ..compare import Tolerance, compare, tolerance_for
-from ..constraint_reference import evaluate_reference, reference_constraints
+from ..constraint_reference import evaluate_reference, reference_constraints, reference_frames
 from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
 from ..states import FULL, QUICK, State, scenario_states
@@ -185,7 +186,11 @@ def original_urdf_case(scenario) -> Optional[ModelCase]:
                                  [lk.name for lk in model.links], list(model.frames),
                                  scenario.frozen, model.gravity, model.stiffness,
                                  model.spring_reference, model.damping,
-                                 point_springs=model.point_springs)
+                                 point_springs=model.point_springs,
+                                 auxiliary_frames={
+                                     name: (frame, tf.translation(*np.eye(3)[axis]))
+                                     for name, (frame, axis) in
+                                     reference_frames(scenario.constraints).items()})
     return _case(f"{scenario.name} (original URDF)", "original URDF", scenario,
                  scenario.system, pin_sys)
 

@@ -256,7 +256,7 @@ def _lock_value(joint, value, name, problems):
 def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: Sequence[str],
                        frame_names: Sequence[str], frozen: Mapping[str, float], gravity,
                        stiffness, spring_reference, damping,
-                       point_springs=()) -> PinocchioSystem:
+                       point_springs=(), auxiliary_frames=None) -> PinocchioSystem:
     """:class:`PinocchioSystem` of the user's URDF, reduced to the gpme chain by Pinocchio.
 
     urdf_path        : the user's URDF (whole tree); Pinocchio's parser reads it
@@ -267,6 +267,9 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
     gravity          : (3,) m/s^2, world frame (a URDF has none)
     point_springs    : the model's point springs (a URDF has none), evaluated here from
                        Pinocchio's frames
+    auxiliary_frames : {name: (frame, (4, 4) offset)} frames the URDF does not have, added
+                       on ``frame`` at that offset (the points one metre along an axis of
+                       crosscheck.constraint_reference)
     stiffness, spring_reference, damping : (n,) gpme order; a URDF has no springs, and a
                        model file may override the URDF's <dynamics damping>, so these come
                        from the model (the only terms not read by Pinocchio here); the
@@ -306,6 +309,13 @@ def from_original_urdf(urdf_path, coordinate_names: Sequence[str], link_names: S
     if problems:
         raise ModelFileError([f"original URDF {urdf_path}: {p}" for p in problems])
     pm = pin.buildReducedModel(full, lock_ids, q_ref) if lock_ids else full
+    for name, (base, offset) in (auxiliary_frames or {}).items():
+        if pm.existFrame(base) and not pm.existFrame(name):
+            base_id = pm.getFrameId(base)
+            frame = pm.frames[base_id]
+            pm.addFrame(pin.Frame(name, frame.parentJoint, base_id,
+                                  frame.placement * pin.SE3(np.asarray(offset, dtype=float)),
+                                  pin.FrameType.OP_FRAME))
     q_index, v_index, continuous = [], [], []
     for name in chain:
         joint = pm.joints[pm.getJointId(name)]
