@@ -110,6 +110,23 @@ def point_spring_energy(model, kin) -> float:
                for s in model.point_springs)
 
 
+def point_spring_matrices(model, kin) -> tuple:
+    """((n, n) K, (n, n) D): the point springs' line stiffness and damping at kin, the sums
+    of stiffness g g^T and damping g g^T with g = e^T (J_a - J_b) the spring line's row:
+    the Hessian of their energy where each spring is at its free length (the tension's
+    geometric terms, proportional to L - L0, left out).  What gpme_core.stability
+    linearises them with, as it does the joint springs."""
+    n = model.n_coordinates
+    k_mat, d_mat = np.zeros((n, n)), np.zeros((n, n))
+    zero = np.zeros(n)
+    for s in model.point_springs:
+        _, _, e, jac = spring_state(model, s, kin, zero)
+        g = e @ jac
+        k_mat += s.stiffness * np.outer(g, g)
+        d_mat += s.damping * np.outer(g, g)
+    return k_mat, d_mat
+
+
 def check_point_springs(springs, frames) -> list:
     """Problems of a model's point springs (names unique, each valid)."""
     out = [p for s in springs for p in s.problems(frames)]

@@ -22,8 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import mass_matrix
+from .kinematics import chain_kinematics
 from .errors import ModelError
 from .gpme import SWITCH_RCOND
+from .point_springs import point_spring_matrices
 
 # above this many coordinates the linearisation by finite differences (2 x 2n solves and an
 # eigen-decomposition of a 2n x 2n matrix) gives way to the springs-and-inertia estimate
@@ -128,14 +130,19 @@ def _baumgarte_modes(system):
 
 
 def springs_jacobian(model, q):
-    """(2n, 2n) 1/s: [[0, I], [-M^-1 K, -M^-1 D]] of the joint and RFEM springs and dampers
-    and the mass matrix at q (gravity, velocity terms and constraints left out)."""
+    """(2n, 2n) 1/s: [[0, I], [-M^-1 K, -M^-1 D]] of the joint and RFEM springs and dampers,
+    the point springs (gpme_core.point_springs.point_spring_matrices) and the mass matrix
+    at q (gravity, velocity terms and constraints left out)."""
     n = model.n_coordinates
     m_inv = np.linalg.inv(mass_matrix(model, q))
     a = np.zeros((2 * n, 2 * n))
     a[:n, n:] = np.eye(n)
     a[n:, :n] = -m_inv * model.stiffness[None, :]
     a[n:, n:] = -m_inv * model.damping[None, :]
+    if model.point_springs:
+        k_ps, d_ps = point_spring_matrices(model, chain_kinematics(model, q))
+        a[n:, :n] -= m_inv @ k_ps
+        a[n:, n:] -= m_inv @ d_ps
     return a
 
 

@@ -201,3 +201,34 @@ def test_compiled_evaluation_and_run_equal_the_python_path(rng):
     # the dissipated power is the dampers' (joint and spring): the energy balance closes
     np.testing.assert_allclose(runs[0]["W_dissipated"].to_numpy(),
                                runs[1]["W_dissipated"].to_numpy(), rtol=1e-10, atol=1e-12)
+
+
+def test_the_stability_estimate_sees_the_point_springs(rng):
+    """gpme_core.stability linearises the point springs too: their line stiffness is the
+    Hessian of their energy (finite differences) where the springs sit at their free length,
+    and a stiff spring shortens the suggested RK4 step."""
+    from gpme_core.gpme import ProgrammedMotion
+    from gpme_core.point_springs import point_spring_matrices
+    from gpme_core.stability import rk4_step
+    q = rng.uniform(-1, 1, 7)
+    probe = _with_springs(*SPRINGS)
+    kin = chain_kinematics(probe, q)
+    relaxed = [PointSpring(s.name, s.frame, s.anchor, s.stiffness,
+                           spring_state(probe, s, kin, np.zeros(7))[0]) for s in SPRINGS]
+    model = _with_springs(*relaxed)
+    k_mat, _ = point_spring_matrices(model, chain_kinematics(model, q))
+    h = 1e-4
+
+    def energy(x):
+        return point_spring_energy(model, chain_kinematics(model, x))
+    hess = np.empty((q.size, q.size))
+    for i in range(q.size):
+        for j in range(q.size):
+            ei, ej = np.eye(q.size)[i] * h, np.eye(q.size)[j] * h
+            hess[i, j] = (energy(q + ei + ej) - energy(q + ei - ej) - energy(q - ei + ej)
+                          + energy(q - ei - ej)) / (4 * h * h)
+    # second differences: truncation ~h^2, round-off ~eps E / h^2 ~ 1e-8 of the entries
+    np.testing.assert_allclose(k_mat, hess, rtol=0, atol=1e-5 * np.abs(hess).max())
+    stiff = _with_springs(PointSpring("stiff", "E", "F", 3e6, 0.05))
+    q0 = np.zeros(model.n_coordinates)
+    assert rk4_step(ProgrammedMotion(stiff), q0) < 0.2 * rk4_step(ProgrammedMotion(_with_springs()), q0)
