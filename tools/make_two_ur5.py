@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from gpme_core import transforms as tf
+from gpme_core.kinematics import link_transforms
 from gpme_io.modelfile.load import resolve_urdf
 from gpme_io.urdf_reader import load_urdf
 
@@ -96,7 +97,6 @@ def main():
     write()                                       # bar_end at a's flange: find b's flange
     res = load_urdf(OUT, side_file=None, whole_tree=True)
     model = res.model
-    from gpme_core.kinematics import link_transforms
     q = np.zeros(model.n_coordinates)
     for prefix in ("a_", "b_"):
         for name, v in START.items():

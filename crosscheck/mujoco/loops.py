@@ -20,6 +20,7 @@ import xml.etree.ElementTree as ET
 import mujoco
 import numpy as np
 
+from gpme_core.gpme import ProgrammedMotion
 from gpme_core.pair_constraints import AxisAlignment, RelativeCoordinate
 from gpme_core.time_functions import Constant
 
@@ -95,7 +96,6 @@ def native_loops(scenario) -> tuple:
 def _rows_vanish(scenario, a, b, missing, present) -> bool:
     """Whether the rows of the missing axes of a coincidence are structurally zero (value
     and Jacobian) at the start and at seeded states near it, relative to the present rows."""
-    from gpme_core.gpme import ProgrammedMotion
     model = scenario.model
     probe = ProgrammedMotion(model, [RelativeCoordinate(a, b, i, 0.0, name=f"probe_{i}")
                                      for i in missing + present])
