@@ -58,6 +58,9 @@ JOINT_PROGRAMME = "joint programme f''"
 COORDINATE_PROGRAMME = "coordinate programme f'' (cosine)"
 BAUMGARTE_ALPHA = "Baumgarte 2 alpha Phi_dot"
 BAUMGARTE_BETA = "Baumgarte beta^2 Phi"
+TREE_BRANCHES = "tree: no inertial coupling between branches"
+PAIR_ROW = "two-frame constraint row (second frame's part)"
+POINT_SPRINGS = "point springs (elastic force)"
 REDUCED_SOLVE = "reduced solve N^T (h + Q - M p)"
 MULTIPLIERS = "multiplier recovery lambda = A_dc^-T F_dc"
 RK4_WEIGHTS = "RK4 stage weights"
@@ -269,6 +272,21 @@ CATALOGUE = (
           1e-3,
           "the first rigid element of a discretised beam has length dl / 2 x 1.001 (its "
           "mass, centre and inertia)"),
+    # ------------------------------------ trees, two-frame rows, point springs (issue 26)
+    Fault("tree-branch-coupling", TREE_BRANCHES, FAST,
+          "v = column[i] if moves[i, j] else 0.0",
+          "v = column[i] if moves[i, j] else 1e-3 * column[i]", 1e-3,
+          "joints on different branches of a tree couple in M by 1e-3 of the trace "
+          "tr(S_i Hc_j S_j^T) the mask sets to zero (a serial chain is unchanged)"),
+    Fault("pair-row-second-frame", PAIR_ROW, KERNELS,
+          "acc += terms[1 + i] * ja[i, j] + terms[4 + i] * jb[i, j]",
+          "acc += terms[1 + i] * ja[i, j] + 1.001 * terms[4 + i] * jb[i, j]", 1e-3,
+          "the second frame's part grad_b(phi) J_b of a two-frame constraint's Jacobian row "
+          "is 1.001 x too large"),
+    Fault("point-spring-stiffness", POINT_SPRINGS, KERNELS,
+          "elastic = s_par[s, 0] * (length - s_par[s, 1])",
+          "elastic = 1.001 * s_par[s, 0] * (length - s_par[s, 1])", 1e-3,
+          "every point spring's elastic force is 1.001 x too large"),
     Fault("rfem-element-inertia", RFEM_ELEMENT_INERTIA, RFEM,
           "ix = self.density * (self.second_moment_y + self.second_moment_z) * piece_length",
           "ix = 1.001 * self.density * (self.second_moment_y + self.second_moment_z)"
