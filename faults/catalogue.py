@@ -112,8 +112,8 @@ RFEM = "gpme_core/rfem.py"
 CATALOGUE = (
     # ------------------------------------------------ trace-form terms (gpme_core/fast.py)
     Fault("M-composite", MASS_MATRIX, FAST,
-          "hcj[a, c] += hw[j, a, c]",
-          "hcj[a, c] += 1.001 * hw[j, a, c]", 1e-3,
+          "hc[l, i, j] = hw[l, i, j]",
+          "hc[l, i, j] = 1.001 * hw[l, i, j]", 1e-3,
           "the composite world pseudo-inertias Hc_j that M is formed from are 1.001 x too "
           "large (M only; h and g use their own sums)"),
     Fault("h-coriolis", VELOCITY_PRODUCTS, FAST,

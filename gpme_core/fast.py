@@ -174,7 +174,7 @@ def terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot):
 @_jit
 def terms_scratch_size(n):
     """Length of the float scratch of :func:`terms_into` for n coordinates."""
-    return 6 * 16 * n + 2 * 4 * n + 12 * n + n + 3 * 16
+    return 5 * 16 * n + 4 * n + 12 * n + n + 3 * 16
 
 
 @_jit
@@ -182,21 +182,19 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                scratch):
     """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),).
 
-    Per link l: hw_l = T H T^T (world pseudo-inertia), first_l its last column; per
-    joint, over its subtree (gpme_core.dynamics): hc (composite pseudo-inertia), gc
-    (sum of B_l hw_l), wc (first moments), accumulated from the leaves to the root."""
+    Per link l: hw_l = T H T^T (world pseudo-inertia); per joint, over its subtree
+    (gpme_core.dynamics): hc (composite pseudo-inertia), gc (sum of B_l hw_l), wc (first
+    moments: the last columns of T H), accumulated from the leaves to the root."""
     n = q_dot.shape[0]
     hw = scratch[:16 * n].reshape((n, 4, 4))
     hc = scratch[16 * n:32 * n].reshape((n, 4, 4))
     gc = scratch[32 * n:48 * n].reshape((n, 4, 4))
     b_all = scratch[48 * n:64 * n].reshape((n, 4, 4))
     v_all = scratch[64 * n:80 * n].reshape((n, 4, 4))
-    w_all = scratch[80 * n:96 * n].reshape((n, 4, 4))
-    first = scratch[96 * n:100 * n].reshape((n, 4))
-    wc = scratch[100 * n:104 * n].reshape((n, 4))
-    s_rows = scratch[104 * n:116 * n].reshape((12, n))
-    column = scratch[116 * n:117 * n]
-    small = scratch[117 * n:117 * n + 3 * 16].reshape((3, 4, 4))
+    wc = scratch[80 * n:84 * n].reshape((n, 4))
+    s_rows = scratch[84 * n:96 * n].reshape((12, n))
+    column = scratch[96 * n:97 * n]
+    small = scratch[97 * n:97 * n + 3 * 16].reshape((3, 4, 4))
     th, tmp, y = small[0], small[1], small[2]
     for l in range(n):
         _mm4(t_all[l], pseudo_inertias[l], th)
@@ -208,24 +206,29 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                     + th[i, 3] * tl[j, 3]
                 hw[l, i, j] = v
                 hw[l, j, i] = v
-            first[l, i] = th[i, 3]
-            wc[l, i] = 0.0
+            wc[l, i] = th[i, 3]
             for j in range(4):
-                hc[l, i, j] = 0.0
+                # the subtree sums start with the link's own part: its children add theirs
+                # below before the joint reads them (a child's index is above its parent's)
+                hc[l, i, j] = hw[l, i, j]
                 gc[l, i, j] = 0.0
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
-    # B_l = B_p(l) + (2 V_p(l) + S_l qd_l) S_l qd_l,  V_l = V_p(l) + S_l qd_l
+    # B_l = B_p(l) + (2 V_p(l) + S_l qd_l) S_l qd_l,  V_l = V_p(l) + S_l qd_l.  S, V and B
+    # have a zero last row: only the first three are formed (what _mm3_acc reads)
     for l in range(n):
         w = q_dot[l]
         p = parents[l]
-        for i in range(4):
-            for j in range(4):
-                sw = s_all[l, i, j] * w
-                if p < 0:
+        if p < 0:
+            for i in range(3):
+                for j in range(4):
+                    sw = s_all[l, i, j] * w
                     tmp[i, j] = sw
                     b_all[l, i, j] = 0.0
                     v_all[l, i, j] = sw
-                else:
+        else:
+            for i in range(3):
+                for j in range(4):
+                    sw = s_all[l, i, j] * w
                     tmp[i, j] = 2.0 * v_all[p, i, j] + sw
                     b_all[l, i, j] = b_all[p, i, j]
                     v_all[l, i, j] = v_all[p, i, j] + sw
@@ -239,10 +242,6 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                 s_rows[4 * a + c, i] = s_all[i, a, c]
     for j in range(n - 1, -1, -1):
         hcj = hc[j]
-        for a in range(4):
-            for c in range(4):
-                hcj[a, c] += hw[j, a, c]
-            wc[j, a] += first[j, a]
         _mm3_acc(b_all[j], hw[j], 1.0, gc[j])
         _mm3(s_all[j], hcj, y)
         for i in range(j + 1):
