@@ -91,9 +91,12 @@ def drive_forces(model, t):
 
 def generalized_forces(model, t, q, q_dot):
     """(n,) Q = -(g + d + f) + t (f and d with the point springs', gpme_core.point_springs)."""
+    q_out = -(gravity_forces(model, q) + damper_forces(model, q_dot) + spring_forces(model, q)) \
+        + drive_forces(model, t)
+    if not model.point_springs:
+        return q_out
     f_ps, d_ps = point_spring_forces(model, chain_kinematics(model, q), q_dot)
-    return -(gravity_forces(model, q) + damper_forces(model, q_dot) + spring_forces(model, q)
-             + f_ps + d_ps) + drive_forces(model, t)
+    return q_out - (f_ps + d_ps)
 
 
 def kinetic_energy(model, q, q_dot):
@@ -165,10 +168,12 @@ def dynamics_terms(model, t, q, q_dot):
             fast.chain_and_terms, model.origins, model.generators, model.is_revolute,
             model.pseudo_inertias, model.gamma, model.parents, model.moves, q, q_dot)
         kin = ChainKinematics(q, t_all, s_all, model.moves)
-        f_ps, d_ps = point_spring_forces(model, kin, q_dot)
-        return DynamicsTerms(kin, m, h, g,
-                             model.stiffness * (q - model.spring_reference) + f_ps,
-                             model.damping * q_dot + d_ps, model.drive_forces(t))
+        f = model.stiffness * (q - model.spring_reference)
+        d = model.damping * q_dot
+        if model.point_springs:
+            f_ps, d_ps = point_spring_forces(model, kin, q_dot)
+            f, d = f + f_ps, d + d_ps
+        return DynamicsTerms(kin, m, h, g, f, d, model.drive_forces(t))
     kin = chain_kinematics(model, q)
     f_ps, d_ps = point_spring_forces(model, kin, q_dot)
     return DynamicsTerms(kin, mass_matrix(model, kin), velocity_product_terms(model, kin, q_dot),

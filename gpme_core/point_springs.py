@@ -96,6 +96,8 @@ def point_spring_forces(model, kin, q_dot) -> tuple:
     of the model's point springs (N or N m), zero without any."""
     n = model.n_coordinates
     f, d = np.zeros(n), np.zeros(n)
+    if not model.point_springs:
+        return f, d
     for s in model.point_springs:
         length, rate, e, jac = spring_state(model, s, kin, q_dot)
         f += s.stiffness * (length - s.free_length) * (e @ jac)

@@ -124,31 +124,15 @@ def check_run(system, df: pd.DataFrame) -> list:
     times = df["t"].to_numpy(dtype=float)
     out = []
     for spec in system.constraint_specs:
-        if isinstance(spec, SympyPointConstraint):
-            frame = spec.frame
-            points = df[[f"{a}_{frame}" for a in "xyz"]].to_numpy(dtype=float)
-            args = np.column_stack([points, times])
-            terms = spec.terms_along(points, times)
-            gradient = np.column_stack([terms[:, 1:4], terms[:, 13]])
-            hessian = np.empty((len(times), 4, 4))
-            hessian[:, :3, :3] = terms[:, 4:13].reshape(-1, 3, 3)
-            hessian[:, :3, 3] = hessian[:, 3, :3] = terms[:, 14:17]
-            hessian[:, 3, 3] = terms[:, 17]
-            out.append(_check(f"constraint {spec.name!r}", f"phi = {spec.expr}", spec.expr,
-                              spec.symbols, args, gradient, hessian))
-        elif isinstance(spec, SympyPairConstraint):
-            frames = (spec.frame_a, spec.frame_b)
+        frames = ((spec.frame,) if isinstance(spec, SympyPointConstraint) else
+                  (spec.frame_a, spec.frame_b) if isinstance(spec, SympyPairConstraint)
+                  else ())
+        if frames:
             points = df[[f"{a}_{f}" for f in frames for a in "xyz"]].to_numpy(dtype=float)
-            args = np.column_stack([points, times])
-            terms = spec.terms_along(points, times)
-            # (phi, grad (6), Hessian (36), phi_t, grad_t (6), phi_tt): in (s, t), 7 wide
-            gradient = np.column_stack([terms[:, 1:7], terms[:, 43]])
-            hessian = np.empty((len(times), 7, 7))
-            hessian[:, :6, :6] = terms[:, 7:43].reshape(-1, 6, 6)
-            hessian[:, :6, 6] = hessian[:, 6, :6] = terms[:, 44:50]
-            hessian[:, 6, 6] = terms[:, 50]
+            gradient, hessian = _space_time(spec.terms_along(points, times), points.shape[1])
             out.append(_check(f"constraint {spec.name!r}", f"phi = {spec.expr}", spec.expr,
-                              spec.symbols, args, gradient, hessian))
+                              spec.symbols, np.column_stack([points, times]), gradient,
+                              hessian))
         elif isinstance(spec, (JointProgramme, CoordinateProgramme)) and isinstance(
                 spec.function, SympyTimeFunction):
             fn = spec.function
@@ -159,6 +143,20 @@ def check_run(system, df: pd.DataFrame) -> list:
                               f"f(t) = {fn.expr}", fn.expr, (fn.t_symbol,), times[:, None],
                               values[:, 1:2], values[:, 2].reshape(-1, 1, 1)))
     return out
+
+
+def _space_time(terms: np.ndarray, k: int) -> tuple:
+    """(gradient (s, k + 1), Hessian (s, k + 1, k + 1)) in (coordinates, t) from the local
+    terms (s, ...) of an expression of k world coordinates, laid out as (phi, grad (k),
+    Hessian (k x k), phi_t, grad_t (k), phi_tt) (SympyPointConstraint: k = 3,
+    SympyPairConstraint: k = 6)."""
+    hess_end = 1 + k + k * k
+    gradient = np.column_stack([terms[:, 1:1 + k], terms[:, hess_end]])
+    hessian = np.empty((len(terms), k + 1, k + 1))
+    hessian[:, :k, :k] = terms[:, 1 + k:hess_end].reshape(-1, k, k)
+    hessian[:, :k, k] = hessian[:, k, :k] = terms[:, hess_end + 1:hess_end + 1 + k]
+    hessian[:, k, k] = terms[:, hess_end + 1 + k]
+    return gradient, hessian
 
 
 def kink_measures(args: np.ndarray, gradient: np.ndarray, hessian: np.ndarray) -> np.ndarray:
