@@ -141,7 +141,10 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
         if t == 0.0:                 # Exudyn's start ignores constraints by user functions:
             ae = np.full(ae.shape, np.nan)          # no multipliers at t = 0
         for name, (obj, axis) in system.joint_programmes.items():
-            row[f"lambda_{name}"] = -float(ae[mbs.systemData.GetObjectLTGAE(obj)[axis]])
+            # the generic joint's AE coordinate along its free axis is the constraint torque
+            # (force) on the child, gpme's lambda of q_k - f(t) itself (measured on the
+            # spin-up hub: the same value, 2.0 relative apart with the other sign)
+            row[f"lambda_{name}"] = float(ae[mbs.systemData.GetObjectLTGAE(obj)[axis]])
         for obj, names in system.constraint_objects:
             idx = mbs.systemData.GetObjectLTGAE(obj)
             for i, name in enumerate(names):
@@ -171,6 +174,8 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
                for nodes in system.beam_nodes.values() for nd in nodes) if system.beam_nodes else 1.0
     ti.newton.absoluteTolerance = newton_absolute_tolerance(layout, system.elements, size)
     ti.adaptiveStep = False
+    # sparse LU: a beam mesh gives a banded system; the dense default grows as N^3
+    settings.linearSolverType = exu.LinearSolverType.EigenSparse
     sim = exu.MainSolverImplicitSecondOrder()
     start = time.perf_counter()
     try:

@@ -58,8 +58,10 @@ class Reference:
 
 def continuum_reference(model, q0, q_dot0, t_end, output_dt, specs, quantities,
                         elements=8, dt=0.01, max_elements=128, min_dt=1e-4,
-                        fraction=REFERENCE_FRACTION, log=print) -> Reference:
-    """Refine mesh, then step, until every quantity's change < fraction x its peak."""
+                        fraction=REFERENCE_FRACTION, log=print, groups=None) -> Reference:
+    """Refine mesh, then step, until every quantity's change < fraction x its peak (the
+    largest peak of its group when ``groups`` {name: [columns]} is given: a deflection
+    component that stays near 0 is judged on the scale of the others)."""
     history = []
 
     def run(ne, h):
@@ -71,8 +73,14 @@ def continuum_reference(model, q0, q_dot0, t_end, output_dt, specs, quantities,
     def changes(a, b):
         return {c: max_difference(a, b, c) for c in quantities}
 
+    def scale(ref, c):
+        for cols in (groups or {}).values():
+            if c in cols:
+                return max(_peak(ref, g) for g in cols)
+        return _peak(ref, c)
+
     def settled(ch, ref):
-        return all(ch[c] <= fraction * max(_peak(ref, c), 1e-300) for c in quantities)
+        return all(ch[c] <= fraction * max(scale(ref, c), 1e-300) for c in quantities)
 
     ne, h = elements, dt
     coarse = run(ne, h)
@@ -93,15 +101,22 @@ def continuum_reference(model, q0, q_dot0, t_end, output_dt, specs, quantities,
     return Reference(coarse, ne, h, mesh, step, history)
 
 
-def rfem_history(system, q0, q_dot0, t_end, output_dt, dt=None, method="RK4") -> pd.DataFrame:
-    """The compared quantities from a gpme run of ``system`` (gpme's own kinematics)."""
+def rfem_history(system, q0, q_dot0, t_end, output_dt, dt=None, method="RK4",
+                 flexible_of=None) -> pd.DataFrame:
+    """The compared quantities from a gpme run of ``system`` (gpme's own kinematics).
+    flexible_of: for a rigid model (n = 0), the flexible model whose columns to give: its
+    joint coordinates and multipliers (no tip columns: a rigid link has no deflection)."""
     h = simulate(system, t_end, q0, q_dot0, dt=dt, output_dt=output_dt, method=method)
     names = system.constraint_names
     q_cols = list(system.model.coordinate_names)
     lam_cols = [f"lambda_{c}" for c in names]
-    rows = [rfem_quantities(system.model, r["t"], r[q_cols].to_numpy(dtype=float),
-                            r[lam_cols].to_numpy(dtype=float), names)
-            for _, r in h.iterrows()]
+    if flexible_of is not None:
+        rows = [{"t": r["t"], **{c: r[c] for c in q_cols},
+                 **{c: r[c] for c in lam_cols}} for _, r in h.iterrows()]
+    else:
+        rows = [rfem_quantities(system.model, r["t"], r[q_cols].to_numpy(dtype=float),
+                                r[lam_cols].to_numpy(dtype=float), names)
+                for _, r in h.iterrows()]
     df = pd.DataFrame(rows)
     df["t"] = np.round(df["t"] / output_dt) * output_dt
     df.attrs.update(dt=h.attrs.get("dt"), method=method)

@@ -26,8 +26,9 @@ Built from a :class:`~crosscheck.continuum.layout.ContinuumLayout` (model data o
 
 Sign of the multipliers: Exudyn's AE coordinates lambda_exu enter as M q_ddot + C_q^T
 lambda_exu = f; gpme's lambda = -lambda_exu for the same Phi rows (as in
-crosscheck.exudyn.runs).  A joint programme's multiplier is the generic joint's reaction
-along its free axis (a torque in N m or a force in N) with the same sign rule.
+crosscheck.exudyn.runs).  A joint programme's multiplier is the generic joint's AE
+coordinate along its free axis (a torque in N m or a force in N), the constraint's load on
+the child, which is gpme's lambda itself (crosscheck.continuum.runs).
 """
 from dataclasses import dataclass, field
 from typing import Mapping, Optional
