@@ -44,6 +44,9 @@ ENGINES = {e.name: e for e in (
     Engine("exudyn", "Exudyn", "exudyn", "exudyn", "exudyn",
            "programmed runs with the task as exact (index-3) algebraic constraints and "
            "their reactions, with its own implicit integrator"),
+    Engine("continuum", "Exudyn (continuum beams)", "exudyn", "exudyn", "exudyn",
+           "model validity: each RFEM link as geometrically exact beam elements in whole "
+           "programmed runs (tip deflection and rotation, joint coordinates, multipliers)"),
 )}
 
 

@@ -58,8 +58,8 @@ from .reports.tables import summarise, write_csv
 from .run_checks import rows_frame, run_rows, run_warnings
 from .verify_meta import environment
 
-STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
-OPTIONAL_STEPS = ("drake", "exudyn")      # crosscheck.engines: optional extras
+STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn", "continuum")
+OPTIONAL_STEPS = ("drake", "exudyn", "continuum")   # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
 # what verify is doing, one line per step and run (shown by the `gpme` command's logging
 # setup, gpme/console_log.py; silent when called as a library)

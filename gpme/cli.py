@@ -312,7 +312,7 @@ def build_parser():
     sim.set_defaults(func=_simulate)
     cc = sub.add_parser("crosscheck", help="compare gpme with one engine: Pinocchio, MuJoCo, "
                                            "Drake or Exudyn (the last two optional extras)")
-    cc.add_argument("engine", choices=("pinocchio", "mujoco", "drake", "exudyn"))
+    cc.add_argument("engine", choices=("pinocchio", "mujoco", "drake", "exudyn", "continuum"))
     _model_option(cc)
     cc.add_argument("--quick", action="store_true", help="CI-sized run")
     cc.add_argument("--out", default=None, help="report directory (default reports/<engine>-<time>)")
@@ -325,7 +325,7 @@ def build_parser():
     _model_option(ver)
     ver.add_argument("--quick", action="store_true", help="CI-sized run")
     ver.add_argument("--only", choices=("gpme", "paper", "pinocchio", "mujoco", "drake",
-                                        "exudyn"), default=None,
+                                        "exudyn", "continuum"), default=None,
                      help="one step only ('paper' is the gpme step of the default crane)")
     ver.add_argument("--out", default="reports", help="reports root directory")
     ver.add_argument("--keep", type=int, default=None, metavar="N",

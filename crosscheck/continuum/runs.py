@@ -47,11 +47,12 @@ NEWTON_RELATIVE_TOL = 1e-9
 ROUND_OFF_MARGIN = 100.0
 
 
-def newton_absolute_tolerance(layout, elements, size) -> float:
+def newton_absolute_tolerance(layout, elements, size, euler_bernoulli=False) -> float:
     """Newton's absolute residual goal (see ROUND_OFF_MARGIN) for these beams and meshes;
     size: m, the largest distance of the model from the world origin."""
     from .section import continuum_section
-    k = max([max(continuum_section(b.beam).stiffness[:3]) * elements[b.name] / b.beam.length
+    k = max([max(continuum_section(b.beam, euler_bernoulli).stiffness[:3]) * elements[b.name]
+             / b.beam.length
              for b in layout.beams] or [1.0])
     return ROUND_OFF_MARGIN * float(np.finfo(float).eps) * k * max(size, 1.0)
 
@@ -101,13 +102,14 @@ def _joint_value(model, system, k, poses_of) -> float:
 
 
 def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, specs=(),
-                  elements=8, gravity=None, spectral_radius: float = SPECTRAL_RADIUS) -> pd.DataFrame:
+                  elements=8, gravity=None, spectral_radius: float = SPECTRAL_RADIUS,
+                  euler_bernoulli: bool = False) -> pd.DataFrame:
     """The continuum model's run from q0, q_dot0 (sde entries ignored: the beams start
     straight), step dt (s) to t_end (s), recorded every output_dt (s, a whole number of
     steps).  Returns the columns of the module docstring plus ``t``; attrs: engine, dt,
     elements, wall_time_s, notes.  SimulationError names Exudyn's message on failure."""
     layout = continuum_layout(model)
-    system = build_system(model, layout, q0, q_dot0, specs, elements, gravity)
+    system = build_system(model, layout, q0, q_dot0, specs, elements, gravity, euler_bernoulli)
     mbs = system.mbs
     steps, every = int(round(t_end / dt)), int(round(output_dt / dt))
     if steps < 1 or every < 1 or abs(steps * dt - t_end) > 1e-9 * max(t_end, 1.0) or \
@@ -172,7 +174,8 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
     ti.newton.relativeTolerance = NEWTON_RELATIVE_TOL
     size = max(float(np.abs(mbs.GetNodeOutput(nd, exu.OutputVariableType.Position)).max())
                for nodes in system.beam_nodes.values() for nd in nodes) if system.beam_nodes else 1.0
-    ti.newton.absoluteTolerance = newton_absolute_tolerance(layout, system.elements, size)
+    ti.newton.absoluteTolerance = newton_absolute_tolerance(layout, system.elements, size,
+                                                            euler_bernoulli)
     ti.adaptiveStep = False
     # sparse LU: a beam mesh gives a banded system; the dense default grows as N^3
     settings.linearSolverType = exu.LinearSolverType.EigenSparse
@@ -191,6 +194,7 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
                               f"{(message or 'no message').strip()[:400]}")
     df = pd.DataFrame([records[i] for i in sorted(records)])
     df.attrs.update(engine=ENGINE, dt=dt, elements=dict(system.elements), wall_time_s=wall,
+                    euler_bernoulli=bool(euler_bernoulli),
                     notes=list(system.notes))
     return df
 

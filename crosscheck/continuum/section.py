@@ -73,14 +73,23 @@ def shear_coefficient(beam) -> tuple:
     return 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu), "rectangle-like"
 
 
-def continuum_section(beam) -> ContinuumSection:
-    """:class:`ContinuumSection` of a gpme_core.rfem.BeamProperties."""
+# Euler-Bernoulli limit of the rod: axial and shear stiffness (and their damping) scaled by
+# this factor, so their compliance, e_limit = 3 E I / (k G A L^2) + E I / (E A L^2) ~ 1e-2 for
+# the stockiest example link, falls to ~1e-6 of the bending one: the limit RFEM converges to
+EULER_BERNOULLI_FACTOR = 1e4
+
+
+def continuum_section(beam, euler_bernoulli: bool = False) -> ContinuumSection:
+    """:class:`ContinuumSection` of a gpme_core.rfem.BeamProperties; ``euler_bernoulli``:
+    axial and shear stiffness x EULER_BERNOULLI_FACTOR (an inextensible, shear-rigid rod,
+    RFEM's limit), else the section's own (the physical Timoshenko-Reissner rod)."""
     e, g, rho = beam.youngs_modulus, beam.shear_modulus, beam.density
     a, i_y, i_z, j = beam.area, beam.second_moment_y, beam.second_moment_z, beam.torsion_constant
     eta_e = beam.bending_viscosity
     eta_g = beam.torsion_viscosity if beam.torsion_viscosity is not None else eta_e * g / e
     k, shape = shear_coefficient(beam)
-    stiffness = (e * a, k * g * a, k * g * a, g * j, e * i_y, e * i_z)
+    f = EULER_BERNOULLI_FACTOR if euler_bernoulli else 1.0
+    stiffness = (f * e * a, f * k * g * a, f * k * g * a, g * j, e * i_y, e * i_z)
     damping = (eta_e * a, k * eta_g * a, k * eta_g * a, eta_g * j, eta_e * i_y, eta_e * i_z)
     return ContinuumSection(tuple(float(v) for v in stiffness), tuple(float(v) for v in damping),
                             float(rho * a), (float(rho * (i_y + i_z)), float(rho * i_y),

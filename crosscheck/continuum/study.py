@@ -58,14 +58,16 @@ class Reference:
 
 def continuum_reference(model, q0, q_dot0, t_end, output_dt, specs, quantities,
                         elements=8, dt=0.01, max_elements=128, min_dt=1e-4,
-                        fraction=REFERENCE_FRACTION, log=print, groups=None) -> Reference:
+                        fraction=REFERENCE_FRACTION, log=print, groups=None,
+                        euler_bernoulli=False) -> Reference:
     """Refine mesh, then step, until every quantity's change < fraction x its peak (the
     largest peak of its group when ``groups`` {name: [columns]} is given: a deflection
     component that stays near 0 is judged on the scale of the others)."""
     history = []
 
     def run(ne, h):
-        df = continuum_run(model, q0, q_dot0, t_end, h, output_dt, specs, elements=ne)
+        df = continuum_run(model, q0, q_dot0, t_end, h, output_dt, specs, elements=ne,
+                           euler_bernoulli=euler_bernoulli)
         history.append((ne, h, df.attrs["wall_time_s"]))
         log(f"  continuum: {ne} elements, dt = {h:g} s, {df.attrs['wall_time_s']:.1f} s")
         return df

@@ -132,6 +132,7 @@ class ContinuumSystem:
     joint_programmes: dict = field(default_factory=dict)
     constraint_names: tuple = ()
     notes: list = field(default_factory=list)
+    euler_bernoulli: bool = False
 
 
 def _ep_node(mbs, pose, v, w) -> int:
@@ -170,7 +171,8 @@ def _split_constraints(specs, model, layout):
 
 
 def build_system(model, layout: ContinuumLayout, q0, q_dot0, specs=(), elements=8,
-                 gravity: Optional[np.ndarray] = None) -> ContinuumSystem:
+                 gravity: Optional[np.ndarray] = None,
+                 euler_bernoulli: bool = False) -> ContinuumSystem:
     """Add the continuum model of gpme ``model`` to a new Exudyn MainSystem.
 
     q0, q_dot0 (n,): the start (rad, m; rad/s, m/s), the sde entries ignored (the beams
@@ -192,6 +194,7 @@ def build_system(model, layout: ContinuumLayout, q0, q_dot0, specs=(), elements=
     per_beam = {b.name: int(elements[b.name] if isinstance(elements, Mapping) else elements)
                 for b in layout.beams}
     out = ContinuumSystem(mbs, layout, per_beam)
+    out.euler_bernoulli = bool(euler_bernoulli)
     poses, vel, omega = link_states(model, q, q_dot)
     g = np.asarray(model.gravity if gravity is None else gravity, dtype=float)
     ground = mbs.AddObject(ObjectGround())
@@ -228,7 +231,7 @@ def _add_beam(mbs, out, beam, poses, vel, omega, g, rigid_marker):
     n_el = out.elements[beam.name]
     if n_el < 1:
         raise ModelError(f"beam {beam.name!r}: at least one element, got {n_el}")
-    cs = continuum_section(beam.beam)
+    cs = continuum_section(beam.beam, out.euler_bernoulli)
     section = exu.BeamSection()
     section.stiffnessMatrix = np.diag(cs.stiffness)
     section.dampingMatrix = np.diag(cs.damping)
@@ -246,6 +249,8 @@ def _add_beam(mbs, out, beam, poses, vel, omega, g, rigid_marker):
     elements = [mbs.AddObject(ObjectBeamGeometricallyExact(
         nodeNumbers=[nodes[i], nodes[i + 1]], length=length / n_el, sectionData=section))
         for i in range(n_el)]
+    if any(cs.damping):
+        _add_material_damping(mbs, nodes, cs, length / n_el)
     if np.any(g):
         for e in elements:
             mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(
@@ -264,6 +269,31 @@ def _add_beam(mbs, out, beam, poses, vel, omega, g, rigid_marker):
                      f"{cs.shear_coefficient:.4f}, {cs.shape} section), GJ = {cs.stiffness[3]:.4g}, "
                      f"EI_y = {cs.stiffness[4]:.4g}, EI_z = {cs.stiffness[5]:.4g} N m^2, rho A = "
                      f"{cs.mass_per_length:.4g} kg/m")
+
+
+def _add_material_damping(mbs, nodes, cs, element_length):
+    """Kelvin-Voigt damping of a beam as one damper per element between its two nodes.
+
+    Exudyn 1.13's ObjectBeamGeometricallyExact ignores its section's damping matrix
+    (measured: a cantilever's free vibration does not decay with any damping matrix,
+    tests/test_continuum.py), so the section damping is put on the element's relative
+    motion instead: an ObjectConnectorRigidBodySpringDamper between node i and node i + 1
+    (no stiffness) with damping eta_E A / l_e on the relative velocity along the element's
+    x axis and eta_G J / l_e, eta_E I_y / l_e, eta_E I_z / l_e on the relative angular
+    velocity about x, y, z of node i's frame: the element's mean strain rates times its
+    section damping, integrated over its length l_e.  The shear damping is left out (the
+    relative lateral velocity also holds the bending rotation); as the mesh is refined this
+    is the continuum's Kelvin-Voigt damping, the same law RFEM discretises at its sdes.
+    """
+    d = np.zeros((6, 6))
+    d[0, 0] = cs.damping[0] / element_length
+    d[3, 3], d[4, 4], d[5, 5] = (v / element_length for v in cs.damping[3:])
+    zero = np.zeros((6, 6)).tolist()
+    for a, b in zip(nodes[:-1], nodes[1:]):
+        mbs.AddObject(ObjectConnectorRigidBodySpringDamper(
+            markerNumbers=[mbs.AddMarker(MarkerNodeRigid(nodeNumber=a)),
+                           mbs.AddMarker(MarkerNodeRigid(nodeNumber=b))],
+            stiffness=zero, damping=d.tolist()))
 
 
 def _add_joint(mbs, out, model, k, rigid_marker, programme):

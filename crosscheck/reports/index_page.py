@@ -29,9 +29,10 @@ from .tables import checks_worst_first
 ENGINE_TITLES = {"gpme": "gpme alone: each model's run", "pinocchio": "Pinocchio (term by term)",
                  "mujoco": "MuJoCo (terms and full runs)",
                  "drake": "Drake (terms of a MultibodyPlant from the URDF, free runs)",
-                 "exudyn": "Exudyn (programmed runs with exact index-3 constraints)"}
+                 "exudyn": "Exudyn (programmed runs with exact index-3 constraints)",
+                 "continuum": "Model validity (RFEM links against geometrically exact beams)"}
 ENGINE_VERSION_KEYS = {"gpme": "gpme", "pinocchio": "pinocchio (pin)", "mujoco": "mujoco",
-                       "drake": "drake", "exudyn": "exudyn"}
+                       "drake": "drake", "exudyn": "exudyn", "continuum": "exudyn"}
 NOT_INSTALLED = "not installed"       # crosscheck.verify_meta's version of a missing package
 MAX_FAILING_LISTED = 8
 MAX_KEY_PLOTS = 3

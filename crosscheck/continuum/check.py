@@ -1,0 +1,169 @@
+"""`gpme verify` step "continuum": the model-validity section of every flexible model.
+
+For each scenario whose model has flexible links (RFEM n >= 1), crosscheck.continuum.
+validity gates RFEM at the model's n against the refined continuum model (Exudyn's
+geometrically exact beams); models without flexible links get one information row.  The
+page continuum.html shows per model the gate rows, the convergence table of RFEM in the
+number of segments against the continuum (largest difference over the horizon per
+quantity, relative to its peak, observed order between successive n; quick: n, 2 n; full:
+1, 2, 3, 5, 10, 20 and the model's n, 2 n), the continuum's mesh and step study, and a
+plot of the elastic tip deflection for several n against the continuum.
+"""
+import logging
+import time
+from pathlib import Path
+from typing import Optional, Sequence
+
+import exudyn as exu
+import numpy as np
+import pandas as pd
+
+from gpme_core.errors import GpmeError
+from gpme_io.atomic import atomic_write_bytes, atomic_write_text
+
+from ..compare import Tolerance, compare
+from ..crane_cases import crane_cases
+from ..reports.html import comparison_page, section, table
+from ..reports.rows import own_rows, write_rows
+from .runs import ENGINE as RUN_ENGINE
+from .study import max_difference, rfem_history
+from .validity import (ENGINE, SECTION, Validity, check_scenario, has_flexible_links,
+                       scenario_with_segments, straight_start)
+
+log = logging.getLogger("gpme.verify")
+TABLE_NS = (1, 2, 3, 5, 10, 20)
+
+
+def default_scenarios(quick: bool = False) -> list:
+    return crane_cases(ENGINE, quick)
+
+
+def _info_row(scenario, quantity, text) -> dict:
+    row = compare(ENGINE, scenario.model.name, quantity, "-", [0.0], [0.0],
+                  Tolerance(float("inf"), 0.0, f"information: {text}"), ["-"])
+    row["section"] = SECTION
+    return row
+
+
+def convergence_table(scenario, validity: Validity, ns: Sequence[int]) -> pd.DataFrame:
+    """Rows (n, quantity, max difference, relative to the peak, observed order) of RFEM at
+    each n (every flexible link) against the validity check's continuum reference."""
+    ref = validity.reference.frame.copy()
+    out_dt = validity.output_dt
+    ref["t"] = np.round(ref["t"] / out_dt) * out_dt
+    cols = [c for g in ("defl", "rot", "axial", "joint", "lambda") for c in validity.groups.get(g, [])]
+    rows, last = [], {}
+    for n in ns:
+        sc = scenario_with_segments(scenario, lambda _old, n=n: n)
+        q0, v0 = straight_start(sc)
+        df = rfem_history(sc.system, q0, v0, validity.horizon, out_dt)
+        validity.rfem.setdefault(f"n={n}", df)
+        for c in cols:
+            err = max_difference(df, ref, c)
+            peak = float(np.nanmax(np.abs(ref[c].to_numpy())))
+            order = np.nan
+            if c in last and last[c][1] > 0 and err > 0:
+                order = np.log(last[c][1] / err) / np.log(n / last[c][0])
+            rows.append({"n": n, "quantity": c, "max difference": err,
+                         "relative to peak": err / peak if peak else np.nan,
+                         "observed order": order})
+            last[c] = (n, err)
+    return pd.DataFrame(rows)
+
+
+def _plot(validity: Validity, model_name: str, path: Path):
+    """Elastic tip deflection (the larger transverse component of the first beam) against
+    time: RFEM at each n run, the continuum reference."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from gpme_io.png import figure_png
+    cols = validity.groups.get("defl", [])
+    if not cols:
+        return None
+    ref = validity.reference.frame
+    col = max(cols, key=lambda c: float(np.nanmax(np.abs(ref[c].to_numpy()))))
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    runs = {k: v for k, v in validity.rfem.items() if k.startswith("n=")} or \
+        {k: v for k, v in validity.rfem.items() if k in ("n", "2n")}
+    for label, df in sorted(runs.items(), key=lambda kv: int(kv[0][2:]) if kv[0][2:].isdigit()
+                            else 0):
+        if col not in df:
+            continue
+        ax.plot(df["t"], df[col] * 1e3, lw=1, label=f"RFEM {label}")
+    ax.plot(ref["t"], ref[col] * 1e3, "k--", lw=1.5,
+            label=f"continuum ({validity.reference.elements} elements)")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(f"{col} [mm]")
+    ax.set_title(f"{model_name}: elastic tip deflection")
+    ax.legend(fontsize=7)
+    atomic_write_bytes(path, figure_png(fig))
+    plt.close(fig)
+    return path
+
+
+def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False,
+        progress: bool = False) -> pd.DataFrame:
+    """Model-validity rows of every scenario; writes out_dir/checks/continuum/ and
+    out_dir/continuum.html (with its plots in out_dir/continuum/)."""
+    scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
+    out_dir = Path(out_dir)
+    start = time.perf_counter()
+    rows, sections_ = [], []
+    for scenario in scenarios:
+        t0 = time.perf_counter()
+        if not has_flexible_links(scenario.model):
+            rows.append(_info_row(scenario, "no flexible link", "the model has no RFEM link "
+                                  "(n >= 1): there is no discretisation to judge"))
+            continue
+        log.info(f"  continuum: {scenario.name}")
+        try:
+            validity = check_scenario(scenario, quick, log=lambda m: log.info(f"  {m}"))
+        except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
+            rows.append(_info_row(scenario, "not run", f"the continuum model could not be "
+                                  f"run: {type(exc).__name__}: {str(exc)[:300]}"))
+            continue
+        rows += validity.rows
+        ns = sorted({f.n_segments for f in scenario.model.flexible_links}
+                    | {2 * f.n_segments for f in scenario.model.flexible_links}
+                    | (set() if quick else set(TABLE_NS)))
+        table_df = convergence_table(scenario, validity, ns)
+        plot = _plot(validity, scenario.model.name,
+                     out_dir / "continuum" / f"{scenario.model.name}_tip.png")
+        ref = validity.reference
+        study = pd.DataFrame([{"elements": ne, "dt (s)": h, "wall time (s)": round(w, 1)}
+                              for ne, h, w in ref.history])
+        text = [f"{scenario.model.name}: 0..{validity.horizon:g} s from the start with straight "
+                f"beams, samples every {validity.output_dt:g} s; continuum {ref.elements} "
+                f"elements per beam at dt = {ref.dt:g} s (generalized-alpha); its last mesh and "
+                "step changes per quantity: " + ", ".join(
+                    f"{c} {ref.mesh_change[c]:.2g} / {ref.step_change[c]:.2g}"
+                    for c in ref.mesh_change) + f"; {time.perf_counter() - t0:.0f} s."]
+        sections_.append(section(f"{scenario.model.name}: RFEM against the continuum", text,
+                                 table(table_df, status_column="-",
+                                       left_columns=("quantity",)),
+                                 figures=[(plot.relative_to(out_dir), "elastic tip deflection, "
+                                           "RFEM at several n and the continuum")] if plot else ()))
+        sections_.append(section(f"{scenario.model.name}: the continuum's mesh and step study",
+                                 table=table(study, status_column="-")))
+    df = pd.DataFrame(rows)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
+    intro = [f"{len(df)} comparisons over {len(scenarios)} scenarios; "
+             f"{'quick' if quick else 'full'} run, {time.perf_counter() - start:.1f} s."]
+    atomic_write_text(out_dir / "continuum.html", comparison_page(
+        ENGINE, "RFEM vs continuum beams (model validity)", exu.__version__, df, intro,
+        sections_, CONVENTIONS))
+    return df
+
+
+CONVENTIONS = (
+    "The continuum model (crosscheck.continuum) is the same machine in Exudyn with each "
+    "flexible link as geometrically exact beam elements (axial, shear, torsion and bending "
+    "strains; section from the link's material and section constants) and the rigid links as "
+    "rigid bodies on generic joints; programmed joint coordinates are joint offsets, "
+    "programmed points a constrained point. Both models start with straight beams. Compared: "
+    "the elastic tip deflection and rotation in the beam's root frame, the rigid joint "
+    "coordinates and the multipliers (gpme's sign). Gate: RFEM's own error at n predicted "
+    "from its runs at n and 2 n (order 2, x2 margin), plus the continuum's measured mesh and "
+    f"step error, plus the shear and axial compliance RFEM leaves out. Rows of {RUN_ENGINE}.")
