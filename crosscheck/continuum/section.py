@@ -73,22 +73,39 @@ def shear_coefficient(beam) -> tuple:
     return 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu), "rectangle-like"
 
 
-# Euler-Bernoulli limit of the rod: axial and shear stiffness (and their damping) scaled by
-# this factor, so their compliance, e_limit = 3 E I / (k G A L^2) + E I / (E A L^2) ~ 1e-2 for
-# the stockiest example link, falls to ~1e-6 of the bending one: the limit RFEM converges to
-EULER_BERNOULLI_FACTOR = 1e4
+# Euler-Bernoulli limit of the rod: axial and shear stiffness raised until their
+# compliance relative to the bending one, e_limit = 3 E I / (k G A L^2) + E I / (E A L^2)
+# (the share of a cantilever's tip deflection under a tip load), is this small: the limit
+# RFEM converges to.  Raised no further: a 1e4-fold stiffer rod made Exudyn's Newton fail
+# on the spin-up beam (E A x 1e4 = 2.8e11 N at dt = 0.01 s), while its e_limit is 4e-5
+EULER_BERNOULLI_RESIDUAL = 1e-6
+
+
+def compliance_fraction(beam) -> float:
+    """e_limit (dimensionless) of a beam: its shear and axial against bending compliance."""
+    k, _ = shear_coefficient(beam)
+    ei = beam.youngs_modulus * max(beam.second_moment_y, beam.second_moment_z)
+    length = beam.length
+    return (3.0 * ei / (k * beam.shear_modulus * beam.area * length ** 2)
+            + ei / (beam.youngs_modulus * beam.area * length ** 2))
+
+
+def euler_bernoulli_factor(beam) -> float:
+    """The factor on E A and k G A that brings e_limit down to EULER_BERNOULLI_RESIDUAL."""
+    return max(1.0, compliance_fraction(beam) / EULER_BERNOULLI_RESIDUAL)
 
 
 def continuum_section(beam, euler_bernoulli: bool = False) -> ContinuumSection:
     """:class:`ContinuumSection` of a gpme_core.rfem.BeamProperties; ``euler_bernoulli``:
-    axial and shear stiffness x EULER_BERNOULLI_FACTOR (an inextensible, shear-rigid rod,
-    RFEM's limit), else the section's own (the physical Timoshenko-Reissner rod)."""
+    axial and shear stiffness x euler_bernoulli_factor (a rod inextensible and shear-rigid
+    to EULER_BERNOULLI_RESIDUAL, RFEM's limit), else the section's own (the physical
+    Timoshenko-Reissner rod)."""
     e, g, rho = beam.youngs_modulus, beam.shear_modulus, beam.density
     a, i_y, i_z, j = beam.area, beam.second_moment_y, beam.second_moment_z, beam.torsion_constant
     eta_e = beam.bending_viscosity
     eta_g = beam.torsion_viscosity if beam.torsion_viscosity is not None else eta_e * g / e
     k, shape = shear_coefficient(beam)
-    f = EULER_BERNOULLI_FACTOR if euler_bernoulli else 1.0
+    f = euler_bernoulli_factor(beam) if euler_bernoulli else 1.0
     stiffness = (f * e * a, f * k * g * a, f * k * g * a, g * j, e * i_y, e * i_z)
     damping = (eta_e * a, k * eta_g * a, k * eta_g * a, eta_g * j, eta_e * i_y, eta_e * i_z)
     return ContinuumSection(tuple(float(v) for v in stiffness), tuple(float(v) for v in damping),
