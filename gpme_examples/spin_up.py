@@ -21,7 +21,6 @@ turns beam and hub.
 """
 import numpy as np
 
-from gpme_core import transforms as tf
 from gpme_core.constraints import JointProgramme
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.inertia import RigidBodyInertia

@@ -17,6 +17,9 @@ from typing import Optional, Sequence
 import exudyn as exu
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
+
+from gpme_io.png import figure_png
 
 from gpme_core.errors import GpmeError
 from gpme_io.atomic import atomic_write_bytes, atomic_write_text
@@ -74,16 +77,13 @@ def convergence_table(scenario, validity: Validity, ns: Sequence[int]) -> pd.Dat
 def _plot(validity: Validity, model_name: str, path: Path):
     """Elastic tip deflection (the larger transverse component of the first beam) against
     time: RFEM at each n run, the continuum reference."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from gpme_io.png import figure_png
     cols = validity.groups.get("defl", [])
     if not cols:
         return None
     ref = validity.reference.frame
     col = max(cols, key=lambda c: float(np.nanmax(np.abs(ref[c].to_numpy()))))
-    fig, ax = plt.subplots(figsize=(7, 3.6))
+    fig = Figure(figsize=(7, 3.6))
+    ax = fig.subplots()
     runs = {k: v for k, v in validity.rfem.items() if k.startswith("n=")} or \
         {k: v for k, v in validity.rfem.items() if k in ("n", "2n")}
     for label, df in sorted(runs.items(), key=lambda kv: int(kv[0][2:]) if kv[0][2:].isdigit()
@@ -98,7 +98,6 @@ def _plot(validity: Validity, model_name: str, path: Path):
     ax.set_title(f"{model_name}: elastic tip deflection")
     ax.legend(fontsize=7)
     atomic_write_bytes(path, figure_png(fig))
-    plt.close(fig)
     return path
 
 

@@ -27,9 +27,11 @@ import exudyn as exu
 import numpy as np
 import pandas as pd
 
+from gpme_core import kinematics
 from gpme_core.errors import SimulationError
 
 from .layout import continuum_layout
+from .section import continuum_section
 from .system import build_system
 
 ENGINE = "exudyn-continuum"
@@ -50,7 +52,6 @@ ROUND_OFF_MARGIN = 100.0
 def newton_absolute_tolerance(layout, elements, size, euler_bernoulli=False) -> float:
     """Newton's absolute residual goal (see ROUND_OFF_MARGIN) for these beams and meshes;
     size: m, the largest distance of the model from the world origin."""
-    from .section import continuum_section
     k = max([max(continuum_section(b.beam, euler_bernoulli).stiffness[:3]) * elements[b.name]
              / b.beam.length
              for b in layout.beams] or [1.0])
@@ -202,7 +203,6 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
 def rfem_quantities(model, t, q, lam=None, constraint_names=()) -> dict:
     """The same columns from a gpme state (t s, q (n,)), with gpme's own link frames
     (gpme_core.kinematics): what is being tested, on gpme's side."""
-    from gpme_core import kinematics
     layout = continuum_layout(model)
     frames = kinematics.link_transforms(model, np.asarray(q, dtype=float))
     row = {"t": float(t)}

@@ -36,7 +36,7 @@ from typing import Mapping, Optional
 import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import (LoadForceVector, LoadMassProportional, LoadTorqueVector,
-                                  MarkerBodyMass, MarkerBodyPosition, MarkerBodyRigid,
+                                  MarkerBodyMass, MarkerBodyRigid,
                                   MarkerNodeCoordinates, MarkerNodePosition, MarkerNodeRigid,
                                   NodePoint, NodePointGround, NodeRigidBodyEP,
                                   ObjectBeamGeometricallyExact,
@@ -47,12 +47,10 @@ from exudyn.itemInterface import (LoadForceVector, LoadMassProportional, LoadTor
 from exudyn.rigidBodyUtilities import (AngularVelocity2EulerParameters_t,
                                        RotationMatrix2EulerParameters)
 
-import gpme_core.constraints as gc
 from gpme_core import pair_constraints as pc
 from gpme_core.errors import ModelError
 
-from ..constraint_reference import (ReferenceJointProgramme, ReferencePointConstraint,
-                                    point_expression, reference_constraints)
+from ..constraint_reference import ReferenceJointProgramme, reference_constraints
 from .layout import ContinuumLayout
 from .section import continuum_section
 

@@ -40,6 +40,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gpme_core.errors import GpmeError
+from gpme_io.modelfile import build_scenario, read_model_file
+from gpme_io.modelfile.schema import CraneSource
+from gpme_io.scenario import crane_scenario
 
 from ..compare import Tolerance, compare
 from .layout import continuum_layout
@@ -86,8 +89,6 @@ def scenario_with_segments(scenario, segments):
     rebuilt from its model file (``segments`` of each [[flexible]], or the crane's
     ``n_rfe``), or, for the paper's crane built in code, gpme_io.scenario.crane_scenario."""
     if scenario.source is not None:
-        from gpme_io.modelfile import build_scenario, read_model_file
-        from gpme_io.modelfile.schema import CraneSource
         spec = read_model_file(scenario.source)
         if isinstance(spec.model.source, CraneSource):
             src = dataclasses.replace(spec.model.source, n_rfe=segments(spec.model.source.n_rfe))
@@ -97,7 +98,6 @@ def scenario_with_segments(scenario, segments):
                 dataclasses.replace(f, segments=segments(f.segments)) for f in spec.flexible))
         return build_scenario(spec)
     if scenario.model.name.startswith("crane_flexible"):
-        from gpme_io.scenario import crane_scenario
         n = scenario.model.flexible_links[0].n_segments
         return crane_scenario(segments(n), on_constraints=scenario.on_constraints)
     raise GpmeError(f"{scenario.name}: no way to rebuild the model with other segment counts "
