@@ -21,7 +21,6 @@ spectral radius SPECTRAL_RADIUS: a little numerical damping of the unresolved
 high-frequency axial and shear modes, whose effect on the resolved motion is measured by
 halving the step, crosscheck.continuum.study).
 """
-import time
 
 import exudyn as exu
 import numpy as np
@@ -30,6 +29,7 @@ import pandas as pd
 from gpme_core import kinematics
 from gpme_core.errors import SimulationError
 
+from ..exudyn.model import quiet_settings, solve_implicit
 from .layout import continuum_layout
 from .section import continuum_section
 from .system import build_system
@@ -40,7 +40,6 @@ ENGINE = "exudyn-continuum"
 # beam at dt = 0.01 s: Newton divergence after 13 s); 0.8 damps them within a few steps
 # and changes the resolved modes by O((omega h)^3)
 SPECTRAL_RADIUS = 0.8
-VERBOSE = 0
 NEWTON_RELATIVE_TOL = 1e-9
 # Newton's absolute goal on the residual (N, N m) sits this far above its round-off floor,
 # eps x the stiffest element spring (E A or k G A times N / L, N/m) x the model's size (m):
@@ -163,14 +162,8 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
     mbs.SetPostStepUserFunction(post_step)
     mbs.Assemble()
     record(0.0)
-    settings = exu.SimulationSettings()
+    settings = quiet_settings(t_end, steps)
     ti = settings.timeIntegration
-    ti.verboseMode = VERBOSE
-    ti.verboseModeFile = 0
-    settings.solution.file.write = False
-    settings.show.statistics = settings.show.computationTime = False
-    ti.endTime = float(t_end)
-    ti.numberOfSteps = steps
     ti.generalizedAlpha.spectralRadius = float(spectral_radius)
     ti.newton.relativeTolerance = NEWTON_RELATIVE_TOL
     size = max(float(np.abs(mbs.GetNodeOutput(nd, exu.OutputVariableType.Position)).max())
@@ -180,14 +173,7 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
     ti.adaptiveStep = False
     # sparse LU: a beam mesh gives a banded system; the dense default grows as N^3
     settings.linearSolverType = exu.LinearSolverType.EigenSparse
-    sim = exu.MainSolverImplicitSecondOrder()
-    start = time.perf_counter()
-    try:
-        ok = sim.SolveSystem(mbs, settings)
-        message = "" if ok else sim.GetErrorString()
-    except Exception as exc:           # Exudyn's own errors and those of the user functions
-        ok, message = False, f"{type(exc).__name__}: {exc}"
-    wall = time.perf_counter() - start
+    ok, message, wall, _ = solve_implicit(mbs, settings)
     if not ok or len(records) != steps // every + 1:
         reached = max(records) * output_dt if records else 0.0
         raise SimulationError(f"continuum run of {model.name} failed (dt = {dt:g} s, elements "

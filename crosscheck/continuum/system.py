@@ -149,13 +149,12 @@ def _inertia6(part) -> list:
 
 def _split_constraints(specs, model, layout):
     """({joint index: ReferenceJointProgramme}, {frame: [ReferencePointConstraint]}, names)."""
-    joint_refs, point_refs, names = {}, {}, []
+    joint_refs, point_refs = {}, {}
     for spec in specs:
         if isinstance(spec, pc.PairConstraint):
             raise ModelError(f"constraint {spec.name!r}: two-frame constraints are not realised by "
                              "the continuum model yet")
-        names.append(spec.name)
-    refs = reference_constraints([s for s in specs], model.coordinate_names)
+    refs = reference_constraints(specs, model.coordinate_names)
     for ref in refs:
         if isinstance(ref, ReferenceJointProgramme):
             if ref.index not in layout.joints:
@@ -165,7 +164,7 @@ def _split_constraints(specs, model, layout):
             joint_refs[ref.index] = ref
         else:
             point_refs.setdefault(ref.frame, []).append(ref)
-    return joint_refs, point_refs, tuple(names)
+    return joint_refs, point_refs, tuple(r.name for r in refs)
 
 
 def build_system(model, layout: ContinuumLayout, q0, q_dot0, specs=(), elements=8,

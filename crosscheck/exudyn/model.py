@@ -29,6 +29,7 @@ marker 1, i.e. the generalized force on q_k is -K_k (q_k - q_ref_k) - D_k q_dot_
 Drives are LoadCoordinate loads on q_k with a load user function returning the drive's
 force (N) or torque (N m) at Exudyn's time.  Gravity is the tree's own ``gravity``.
 """
+import time
 from dataclasses import dataclass
 from typing import Mapping
 
@@ -265,6 +266,20 @@ def quiet_settings(end_time: float = 1.0, steps: int = 1):
     s.timeIntegration.endTime = float(end_time)
     s.timeIntegration.numberOfSteps = int(steps)
     return s
+
+
+def solve_implicit(mbs, settings) -> tuple:
+    """Run Exudyn's implicit (generalized-alpha) solver on the assembled ``mbs``: (ok,
+    message, wall time s, solver).  Exudyn's own errors and those raised inside user
+    functions become ok = False with their message, for the caller's SimulationError."""
+    sim = exu.MainSolverImplicitSecondOrder()
+    start = time.perf_counter()
+    try:
+        ok = sim.SolveSystem(mbs, settings)
+        message = "" if ok else sim.GetErrorString()
+    except Exception as exc:           # Exudyn's own errors and those of the user functions
+        ok, message = False, f"{type(exc).__name__}: {exc}"
+    return ok, message, time.perf_counter() - start, sim
 
 
 def mass_and_forces(model, t: float, q, q_dot, damping_form: str = "lagrange"):

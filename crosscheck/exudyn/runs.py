@@ -47,7 +47,7 @@ from ..halving_gates import HalvedRuns
 from ..pinocchio.runs import exact_columns, run_step
 from ..run_gates import PHI_EVAL_ROUNDINGS, phi_floor, phi_term_scale
 from .constraints import CONSISTENT_TOL, ProgrammedConstraints
-from .model import add_tree, mass_and_forces, quiet_settings
+from .model import add_tree, mass_and_forces, quiet_settings, solve_implicit
 
 EPS = float(np.finfo(float).eps)
 ENGINE = "exudyn"
@@ -189,14 +189,7 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float = OUTPUT_
         lam[ae] = lam0
         mbs.systemData.SetAECoordinates(lam.tolist(), configuration=cfg)
     settings = _settings(t_end, steps, solver)
-    sim = exu.MainSolverImplicitSecondOrder()
-    start = time.perf_counter()
-    try:
-        ok = sim.SolveSystem(mbs, settings)
-        message = "" if ok else sim.GetErrorString()
-    except Exception as exc:             # Exudyn's own errors and those of the user functions
-        ok, message = False, f"{type(exc).__name__}: {exc}"
-    wall = time.perf_counter() - start
+    ok, message, wall, sim = solve_implicit(mbs, settings)
     n_out = int(round(t_end / output_dt))
     if not ok or len(records) != n_out + 1:
         reached = max(records) * output_dt
