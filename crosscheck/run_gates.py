@@ -32,6 +32,7 @@ import pandas as pd
 
 from gpme_core.integrate import rk4_step_plan, simulate
 
+from . import run_memo
 from .compare import Tolerance, compare, not_judged
 from .convergence import (COARSEST, ORDER_TOLERANCE, RESOLVED, Convergence,
                           Refinement, RefinementBudget, convergence, refine)
@@ -121,7 +122,12 @@ def refined_gpme_runs(system, q0, q_dot0, t_end: float, dt: float,
     columns = names + [f"{c}_dot" for c in names]
 
     def run_at(h):
-        return simulate(system, t_end, q0, q_dot0, dt=h, output_dt=output_dt)
+        # the same run another step of the verification may ask for (crosscheck.run_memo)
+        key = run_memo.run_key("refined_gpme_run", system, np.asarray(q0, float),
+                               np.asarray(q_dot0, float), float(t_end), float(h),
+                               float(output_dt))
+        return run_memo.memoised(key, lambda: simulate(system, t_end, q0, q_dot0, dt=h,
+                                                       output_dt=output_dt))
 
     def floors_of(runs):
         refined = RefinedRuns(tuple(runs), float(runs[0].attrs.get("dt", step)),

@@ -28,93 +28,31 @@ import json
 import logging
 import shutil
 import time
-import traceback
 from pathlib import Path
 
 import pandas as pd
 
-from gpme_core.errors import GpmeError, OutputWriteError
-from gpme_examples import paper
+from gpme_io import dask_cluster
+from gpme_io.atomic import atomic_write_text
 from gpme_io.budget import run_budget
-from gpme_io.example_outputs import write_example_outputs
-from gpme_io.runs import estimate_scenario, simulate_scenario, write_run_outputs
+from gpme_io.runs import estimate_scenario
 
-from .accurate_step import run_accurately
-from .compare import CRASH_QUANTITY, Tolerance, compare
-from .constraint_reference import with_reference_frames_of
-from .crane_cases import crane_cases
-from .reference_values import reference_rows
-from .engines import missing_message
-from . import run_store
-from . import rfem_reference
+from . import run_store, step_pool
+from .compare import CRASH_QUANTITY
 from .reports import run_diff, strict_json
 from .reports.index_page import write_index
 from .reports.junit import write_junit_xml
-from .reports.rows import check_name, normalise, other_rows, own_rows, write_rows
+from .reports.rows import check_name, normalise, write_rows
 from .reports.summary_md import write_summary_md
-from gpme_io.atomic import atomic_write_text
-
 from .reports.tables import summarise, write_csv
-from .run_checks import rows_frame, run_rows, run_warnings
+from .run_checks import run_warnings
 from .verify_meta import environment
+from .verify_steps import STEPS, default_scenarios
 
-STEPS = ("gpme", "pinocchio", "mujoco", "drake", "exudyn", "continuum")
-OPTIONAL_STEPS = ("drake", "exudyn", "continuum")   # crosscheck.engines: optional extras
 STEP_ALIASES = {"paper": "gpme"}
 # what verify is doing, one line per step and run (shown by the `gpme` command's logging
 # setup, gpme/console_log.py; silent when called as a library)
 log = logging.getLogger("gpme.verify")
-
-
-def default_scenarios(step, quick):
-    """The paper's crane cases a step uses when no model file is given
-    (crosscheck.crane_cases); none for an optional engine that is not installed."""
-    if step in OPTIONAL_STEPS and missing_message(step):
-        return []
-    return crane_cases(step, quick)
-
-
-def _models_step(run_dir, scenarios, quick, progress, max_wall_s=None):
-    """Each scenario's own gpme run: history, figures and the run checks (runs/), and the
-    figures a built-in example adds (paper/: the paper's crane, gpme_io.example_outputs)."""
-    rows, rfem_rows, runs = [], [], []
-    for scenario in scenarios:
-        log.info(f"  gpme: {scenario.name}, {scenario.t_run(quick):g} s ({scenario.integrator})")
-        rfem_rows += rfem_reference.rfem_rows(scenario)     # RFEM vs beam theory
-
-        def run(dt, scenario=scenario):
-            return simulate_scenario(scenario, quick=quick, progress=progress, dt=dt,
-                                     max_wall_s=max_wall_s)
-
-        def checks(df, scenario=scenario):
-            return run_rows(scenario, df)
-
-        if scenario.integrator == "RK4":
-            # the step `gpme simulate` chooses: halved until the run's own checks pass
-            # (crosscheck/accurate_step.py), so both commands judge the same run
-            choice = run_accurately(run, checks, report=lambda line: log.info(f"    {line}"),
-                                    start=paper.step_name(scenario) or "the model file's step")
-            df, scenario_rows = choice.df, choice.rows
-            log.info(f"    {choice.note}")
-        else:
-            df = run(None)
-            scenario_rows = checks(df)
-        log.info(f"    wall time {df.attrs['wall_time_s']:.1f} s")
-        write_run_outputs(scenario, df, run_dir / "runs", compressed=True)
-        rows += scenario_rows + reference_rows(scenario, df)
-        runs.append((scenario, df))
-    write_example_outputs(runs, run_dir / "paper")
-    df = _with_rfem_rows(rows_frame(rows), rfem_rows)
-    write_rows(df, run_dir, "gpme")
-    return df
-
-
-def _with_rfem_rows(df, rfem_rows):
-    """The gpme step's run rows and its rows of the RFEM discretisation against closed-form
-    beam theory (crosscheck.rfem_reference, section "rfem"), one table."""
-    if not rfem_rows:
-        return df
-    return pd.concat([df, rfem_reference.rows_frame(rfem_rows)], ignore_index=True)
 
 
 def _merge_prerequisites(staging, tables, prerequisites):
@@ -135,38 +73,17 @@ def _merge_prerequisites(staging, tables, prerequisites):
         write_rows(normalise(table), staging, engine)
 
 
-def _engine_step(name, run_dir, scenarios, quick, progress):
-    module = __import__(f"crosscheck.{name}.check", fromlist=["run"])
-    return module.run(run_dir, scenarios, quick=quick, progress=progress)
-
-
-def _missing_engine_row(step, message):
-    """An information row: optional engine ``step`` is not installed (``message`` says what
-    to install); the run's other steps go on."""
-    row = compare(step, "-", "not run: engine not installed", "-", [0.0], [0.0],
-                  Tolerance(float("inf"), 0.0, f"information: {message}"), ["-"])
-    return pd.DataFrame([{**row, "section": "-"}])
-
-
-def _report_crash(staging, step, exc):
+def _report_crash(staging, step, crash):
     """One line on the console; the traceback of an unexpected exception (not a gpme input
-    or run error, whose message says it all) into <run>/<step>_crash.txt."""
-    if isinstance(exc, GpmeError):
-        log.info(f"[{step}] stopped: {exc}")
+    or run error, whose message says it all) into <run>/<step>_crash.txt (``crash``:
+    crosscheck.verify_steps.Crash)."""
+    if crash.input_error:
+        log.info(f"[{step}] stopped: {crash.message}")
         return
     path = staging / f"{step}_crash.txt"
-    atomic_write_text(path, "".join(traceback.format_exception(exc)))
-    log.info(f"[{step}] crashed: {type(exc).__name__}: {exc} (traceback in "
-         f"{path.name} of the report; please report it as a gpme bug)")
-
-
-def _crash_row(step, exc):
-    return pd.DataFrame([{
-        "engine": step, "model": "-", "quantity": CRASH_QUANTITY,
-        "case": "-", "entry": type(exc).__name__, "gpme_value": float("nan"),
-        "engine_value": float("nan"), "abs_error": float("inf"), "rel_error": float("nan"),
-        "scale": float("nan"), "tol_abs": 0.0, "tol_rel": 0.0, "passed": False,
-        "status": "fail", "reason": f"{exc}"[:500]}])
+    atomic_write_text(path, crash.traceback)
+    log.info(f"[{step}] crashed: {crash.kind}: {crash.message} (traceback in "
+             f"{path.name} of the report; please report it as a gpme bug)")
 
 
 def _models_record(scenarios):
@@ -196,7 +113,7 @@ def _model_names(scenarios, quick, only=None):
 
 
 def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenarios=None,
-               keep=None, max_wall_s=None, compare_to=None):
+               keep=None, max_wall_s=None, compare_to=None, workers=1, scheduler=None):
     """Run the verification; returns (run_dir, summary DataFrame, all rows DataFrame).
 
     scenarios: gpme_io.scenario.Scenario list (``--model`` files); None runs the paper's
@@ -205,6 +122,10 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     max_wall_s: s, each gpme run stopped after this long (None: no limit).
     compare_to: report directory (or its summary.json) to diff against; None: the run
     root/latest points at when this run starts.
+    workers  : 1: the steps one after another in this process; more: at once on a local
+               Dask cluster of that many worker processes (crosscheck.step_pool)
+    scheduler: address of a running Dask scheduler to run the steps on instead (its
+               workers must import the same gpme)
     Staging directories of dead runs in root are removed first.
     """
     root = Path(root)
@@ -217,7 +138,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
     staging = run_store.claim_run_dir(root, run_id)
     try:
         result = _run_steps(root, staging, run_id, quick, only, progress, scenarios,
-                            max_wall_s, previous)
+                            max_wall_s, previous, workers, scheduler)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
@@ -227,44 +148,38 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
 
 
 def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None,
-               previous=(None, "", None)):
+               previous=(None, "", None), workers=1, scheduler=None):
     start = time.perf_counter()
     tables, timings, prerequisites = {}, {}, []
     record = _models_record(scenarios if scenarios is not None else
                             default_scenarios("pinocchio", quick))
     atomic_write_text(staging / "models.json", json.dumps(record, indent=1))
-    for step in STEPS:
-        if only and step != only:
-            continue
-        log.info(f"[{step}] ...")
-        t0 = time.perf_counter()
-        try:
-            if step == "gpme":
-                chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
-                tables[step] = _models_step(staging, chosen, quick, progress, max_wall_s)
-            elif step in OPTIONAL_STEPS and missing_message(step):
-                log.info(f"[{step}] skipped: {missing_message(step)}")
-                tables[step] = _missing_engine_row(step, missing_message(step))
-                write_rows(normalise(tables[step]), staging, step)
-            else:
-                chosen = scenarios if scenarios is not None else default_scenarios(step, quick)
-                # the engines' models carry the auxiliary frames of the reference
-                # derivation of axis alignments (crosscheck.constraint_reference)
-                chosen = [with_reference_frames_of(s) for s in chosen]
-                table = _engine_step(step, staging, chosen, quick, progress)
-                # checks of gpme's own runs made on the way (its observed order) are gpme's
-                prerequisites.append(other_rows(table, step))
-                tables[step] = own_rows(table, step)
-        except OutputWriteError:
-            raise                 # the report cannot be written: the run stops (exit 74)
-        except Exception as exc:  # a crashed step is a failed check, reported in full
-            tables[step] = _crash_row(step, exc)
-            write_rows(normalise(tables[step]), staging, step)   # its row, linked by the index
-            _report_crash(staging, step, exc)
-        timings[step] = time.perf_counter() - t0
+    steps = [step for step in STEPS if not only or step == only]
+
+    def done(outcome):
+        step = outcome.step
+        tables[step], timings[step] = outcome.table, outcome.seconds
+        if len(outcome.prerequisites):
+            prerequisites.append(outcome.prerequisites)
+        if outcome.crash is not None:
+            _report_crash(staging, step, outcome.crash)
         failed = int(failed_checks(tables[step]).sum())
         log.info(f"[{step}] {len(tables[step])} comparisons, {failed} failed, "
-             f"{timings[step]:.1f} s")
+                 f"{timings[step]:.1f} s")
+
+    if scheduler or (workers > 1 and len(steps) > 1):
+        previous_times = ((previous[0] or {}).get("run") or {}).get("step_times_s")
+        with dask_cluster.client_for(scheduler, workers) as client:
+            n_workers = step_pool.run_on_cluster(client, steps, staging, scenarios, quick,
+                                                 max_wall_s, done, previous_times)
+            execution = (f"{len(steps)} steps in parallel on {n_workers} Dask workers "
+                         f"({scheduler or 'local cluster'})")
+    else:
+        step_pool.run_in_process(steps, staging, scenarios, quick, progress, max_wall_s, done)
+        execution = "steps one after another in one process"
+    shutil.rmtree(staging / step_pool.SHARED_RUNS_DIR, ignore_errors=True)
+    tables = {step: tables[step] for step in steps}          # the report's order, not the finish order
+    timings = {step: timings[step] for step in steps}
     _merge_prerequisites(staging, tables, prerequisites)
     # engines without sections (Pinocchio) compare terms; keep gated and ungated cases of
     # one quantity apart (MuJoCo's programmed runs vs its ungated off-manifold start)
@@ -274,7 +189,8 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     for warning in warnings:
         log.warning(warning)
     meta = environment(quick=quick, only=only, run_id=run_id,
-                       wall_time_s=time.perf_counter() - start, step_times_s=timings)
+                       wall_time_s=time.perf_counter() - start, step_times_s=timings,
+                       execution=execution)
     write_csv(summary, staging / "summary.csv")
     document = {
         "run": meta,

@@ -251,6 +251,9 @@ def _verify(args):
     problems = [p for p in (output_dir_problem(args.out),) if p]
     if args.keep is not None and args.keep < 1:
         problems.append(f"--keep must be at least 1 (the run just made), got {args.keep}")
+    if args.workers < 1:
+        problems.append(f"--workers must be at least 1 (1: the steps one after another in "
+                        f"this process), got {args.workers}")
     return verify_command.main(args, problems)   # listed with the flags' and files' problems
 
 
@@ -344,6 +347,13 @@ def build_parser():
     ver.add_argument("--compare-to", default=None, metavar="DIR",
                      help="report directory (or its summary.json) to list changes against "
                           "(default: the run --out/latest points at before this run)")
+    ver.add_argument("--workers", type=int, default=os.cpu_count() or 1, metavar="N",
+                     help="run the steps at once on a local Dask cluster of N worker "
+                          "processes (default: one per core); 1 runs them one after another "
+                          "in this process (crosscheck.step_pool)")
+    ver.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="run the steps on an existing Dask scheduler instead, e.g. "
+                          "tcp://10.0.0.5:8786 (its workers must import the same gpme)")
     ver.add_argument("--no-progress", action="store_true")
     ver.set_defaults(func=_verify)
     sw = sub.add_parser("sweep", help="parameter sweep on a Dask cluster: table, heat maps, "

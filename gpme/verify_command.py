@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from crosscheck import verify
+from crosscheck import verify, verify_steps
 from crosscheck.engines import missing_message
 from crosscheck.mujoco.names import scenario_name_problems   # MuJoCo itself not loaded
 from crosscheck.reports import run_diff, strict_json
@@ -92,7 +92,7 @@ def main(args, problems=()):
         except GpmeError as exc:
             problems.append(str(exc))
     only = verify.STEP_ALIASES.get(getattr(args, "only", None), getattr(args, "only", None))
-    if only in verify.OPTIONAL_STEPS and missing_message(only):
+    if only in verify_steps.OPTIONAL_STEPS and missing_message(only):
         problems.append(f"--only {only}: {missing_message(only)}")
     if problems:
         _print_problems(problems)
@@ -106,7 +106,9 @@ def main(args, problems=()):
                                      progress=not args.no_progress, scenarios=scenarios,
                                      keep=getattr(args, "keep", None),
                                      max_wall_s=wall_limit(getattr(args, "force", False)),
-                                     compare_to=getattr(args, "compare_to", None))
+                                     compare_to=getattr(args, "compare_to", None),
+                                     workers=getattr(args, "workers", None) or 1,
+                                     scheduler=getattr(args, "scheduler", None))
     status = summary.apply(verify.check_status, axis=1)
     with pd.option_context("display.width", 250, "display.max_rows", 500):
         print(terminal_table(summary, status).to_string(index=False))

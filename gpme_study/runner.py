@@ -1,7 +1,7 @@
 """Runs a sweep's pending points on a Dask cluster and writes its table.
 
-By default a LocalCluster is started with one single-threaded worker process per core (no
-set-up); given a scheduler address (``tcp://host:8786``) the points go to that existing
+By default a local cluster (gpme_io.dask_cluster) is started with one single-threaded
+worker process per core (no set-up); given a scheduler address (``tcp://host:8786``) the points go to that existing
 cluster instead, whose workers must import the same gpme_core and gpme_study.  With
 ``in_process=True`` the points run one after another in the calling process, without Dask
 (tiny sweeps, tests, a debugger).  The crane's points run gpme_study.point.run_point, a
@@ -11,25 +11,22 @@ stopped; a point that fails is a row with its status and error, never a stopped 
 """
 import io
 import json
-import logging
 import math
-import os
 import time
 from pathlib import Path
 
 import pandas as pd
 
-from gpme_core.errors import GpmeError
 from gpme_core.integrate import simulate
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_io.atomic import atomic_write_bytes, atomic_write_text
+from gpme_io.dask_cluster import ClusterError
+from gpme_io.dask_cluster import as_completed, close, connect, local_client, worker_count
 
 from .store import ResultStore
 from .sweep_kinds import sweep_kind
 
 
-# s, how long a given --scheduler has to answer
-CONNECT_TIMEOUT_S = 10.0
 # progress lines of a sweep whose output is not a terminal (a log): about this many
 MAX_LOG_LINES = 20
 TABLE_CSV = "results.csv"
@@ -86,16 +83,13 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
         if client is None and scheduler:
             client, problem = connect(scheduler)
             if client is None:
-                raise SweepRunError(problem)
+                raise ClusterError(problem)
         elif client is None:
-            client = _local_client(n_workers)
+            client = local_client(n_workers)
         try:
             n_workers_used = _compute(pending, spec, store, client, progress, report)
         finally:
-            cluster = getattr(client, "_gpme_own_cluster", None)
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            close(client)
     wall = time.perf_counter() - start
     table = assemble_table(spec, keys, store)
     table.attrs.update(points=len(spec.points), computed=len(pending), cached=n_cached,
@@ -103,33 +97,6 @@ def run_sweep(spec, out_dir, scheduler=None, n_workers=None, retry_errors=False,
     write_table(table, out)
     atomic_write_text(out / "last_run.json", json.dumps(dict(table.attrs), indent=1))
     return table
-
-
-class SweepRunError(GpmeError):
-    """The sweep cannot run where it was asked to (a scheduler that does not answer)."""
-
-
-def connect(scheduler, timeout_s=CONNECT_TIMEOUT_S):
-    """(Dask client, None) of the scheduler at ``scheduler``, or (None, problem) when it
-    cannot be reached: a bad address, or no scheduler answering within ``timeout_s``."""
-    from dask.distributed import Client    # Dask: heavy, only for a cluster
-    try:
-        return Client(scheduler, timeout=f"{timeout_s:g}s"), None
-    except (OSError, ValueError, TypeError, TimeoutError) as exc:
-        return None, (f"--scheduler {scheduler!r} cannot be reached within {timeout_s:g} s "
-                      f"({type(exc).__name__}: {exc}); give the address of a running "
-                      "Dask scheduler (tcp://host:8786), or leave --scheduler out for a "
-                      "local cluster")
-
-
-def _local_client(n_workers):
-    from dask.distributed import Client, LocalCluster    # Dask: heavy, only for a cluster
-    cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, dashboard_address=":0",
-                           silence_logs=logging.ERROR)
-    client = Client(cluster)
-    client._gpme_own_cluster = cluster     # closed with the client in run_sweep
-    return client
 
 
 def pending_points(spec, out_dir, retry_errors=False):
@@ -194,9 +161,8 @@ def _warm_up_worker():
 
 
 def _compute(pending, spec, store, client, progress, report):
-    from dask.distributed import as_completed    # Dask: heavy, only for a cluster
     _, run, args = point_job(spec)
-    workers = len(client.scheduler_info().get("workers", {}))
+    workers = worker_count(client)
     report(f"dask: {workers} workers at {client.scheduler.address}; importing gpme and "
            "compiling the numba kernels on each (first call) ...")
     start = time.perf_counter()

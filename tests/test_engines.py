@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from crosscheck import engines, verify
+from crosscheck import engines, verify, verify_steps
 from gpme import cli
 
 
@@ -34,8 +34,8 @@ def without(monkeypatch):
 
 
 def test_every_engine_step_is_registered():
-    assert set(engines.ENGINES) == set(verify.STEPS) - {"gpme"}
-    assert set(verify.OPTIONAL_STEPS) == {e.name for e in engines.ENGINES.values() if e.extra}
+    assert set(engines.ENGINES) == set(verify_steps.STEPS) - {"gpme"}
+    assert set(verify_steps.OPTIONAL_STEPS) == {e.name for e in engines.ENGINES.values() if e.extra}
 
 
 @pytest.mark.parametrize("name,module,extra", [("drake", "pydrake", "drake"),

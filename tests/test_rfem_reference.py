@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from crosscheck import rfem_reference as rr
-from crosscheck.verify import _with_rfem_rows
+from crosscheck.verify_steps import with_rfem_rows
 from gpme_core.inertia import RigidBodyInertia
 from gpme_core.rfem import BeamSection
 from gpme_io.modelfile import load_model_file
@@ -190,6 +190,6 @@ def test_a_rigid_link_has_its_section_compared_only():
 
 def test_verify_gpme_step_table_keeps_the_rfem_section(crane):
     run = pd.DataFrame([{"engine": "gpme", "quantity": "x", "section": "run"}])
-    df = _with_rfem_rows(run, rr.rfem_rows(crane))
+    df = with_rfem_rows(run, rr.rfem_rows(crane))
     assert set(df["section"]) == {"run", "rfem"}
-    assert _with_rfem_rows(run, []) is run
+    assert with_rfem_rows(run, []) is run
