@@ -8,6 +8,12 @@ number of segments against the continuum (largest difference over the horizon pe
 quantity, relative to its peak, observed order between successive n; quick: n, 2 n; full:
 1, 2, 3, 5, 10, 20 and the model's n, 2 n), the continuum's mesh and step study, and a
 plot of the elastic tip deflection for several n against the continuum.
+
+Information rows (never gated): the first natural frequencies of RFEM at the model's n
+against the continuum's at the start configuration (crosscheck.continuum.frequencies:
+beams straight, springs relaxed, loads off, constraints frozen at t = 0), with the
+frequency gate's tolerance (RFEM's error predicted from n and 2 n, plus the continuum's
+mesh change) named in the row's reason.
 """
 import logging
 import time
@@ -28,13 +34,18 @@ from ..compare import Tolerance, compare
 from ..crane_cases import crane_cases
 from ..reports.html import comparison_page, section, table
 from ..reports.rows import own_rows, write_rows
+from . import frequencies as fq
 from .runs import ENGINE as RUN_ENGINE
 from .study import max_difference, rfem_history
 from .validity import (ENGINE, SECTION, Validity, check_scenario, has_flexible_links,
-                       scenario_with_segments, straight_start)
+                       scenario_at, scenario_with_segments, straight_start)
 
 log = logging.getLogger("gpme.verify")
 TABLE_NS = (1, 2, 3, 5, 10, 20)
+FREQUENCY_COUNT = 4                 # natural frequencies per information row
+# the continuum's finest mesh for the frequency rows (quick: 64 elements, ~1 s on the
+# crane; full: fq.MAX_ELEMENTS, ~15 s)
+QUICK_FREQUENCY_ELEMENTS = 64
 
 
 def default_scenarios(quick: bool = False) -> list:
@@ -46,6 +57,40 @@ def _info_row(scenario, quantity, text) -> dict:
                   Tolerance(float("inf"), 0.0, f"information: {text}"), ["-"])
     row["section"] = SECTION
     return row
+
+
+def frequency_rows(scenario, quick: bool) -> list:
+    """Information rows: RFEM's first FREQUENCY_COUNT natural frequencies at the model's n
+    against the continuum's, at the start configuration (module docstring); one row per
+    frequency, its reason giving the frequency gate's tolerance
+    (crosscheck.continuum.frequencies.frequency_checks) and whether it would hold."""
+    system = scenario.system
+    cfg = fq.frequency_configuration(system, 0.0, straight_start(scenario)[0])
+    q = fq.state_of(cfg, system)
+    ref = fq.continuum_reference(scenario.model, cfg.t, q, scenario.constraints,
+                                 FREQUENCY_COUNT, max_elements=QUICK_FREQUENCY_ELEMENTS
+                                 if quick else fq.MAX_ELEMENTS,
+                                 log=lambda m: log.info(f"  {m}"))
+    doubled = scenario_at(scenario, 2).system
+    at_n = fq.rfem_frequencies(system, cfg.t, q, FREQUENCY_COUNT)
+    at_2n = fq.rfem_frequencies(doubled, cfg.t, fq.state_of(cfg, doubled), FREQUENCY_COUNT)
+    n_text = ", ".join(f"{f.name}: n = {f.n_segments}" for f in scenario.model.flexible_links)
+    case = (f"{n_text}; t = 0, beams straight, springs relaxed, loads off; continuum "
+            f"{ref.elements} elements; {ref.zero_modes} rigid mode(s) left out")
+    rows = []
+    for check, label in zip(fq.frequency_checks(at_n, at_2n, ref), at_n.labels):
+        verdict = "within" if check.passed else "outside"
+        row = compare(ENGINE, scenario.model.name, f"natural frequency {check.mode} vs "
+                      "continuum (Hz)", case, [check.rfem_n], [check.continuum],
+                      Tolerance(float("inf"), 0.0,
+                                f"information: RFEM ({label or 'mode'}) at n; {verdict} the "
+                                f"frequency gate's {check.tolerance:.3g} Hz (RFEM's error "
+                                f"predicted from n and 2 n: 2n gives {check.rfem_2n:.6g} Hz; "
+                                f"the continuum's last mesh change {check.continuum_change:.2g} "
+                                "Hz)"), [label or f"mode {check.mode}"])
+        row["section"] = SECTION
+        rows.append(row)
+    return rows
 
 
 def convergence_table(scenario, validity: Validity, ns: Sequence[int]) -> pd.DataFrame:
@@ -123,6 +168,11 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
                                   f"run: {type(exc).__name__}: {str(exc)[:300]}"))
             continue
         rows += validity.rows
+        try:
+            rows += frequency_rows(scenario, quick)
+        except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
+            rows.append(_info_row(scenario, "natural frequencies not compared",
+                                  f"{type(exc).__name__}: {str(exc)[:300]}"))
         ns = sorted({f.n_segments for f in scenario.model.flexible_links}
                     | {2 * f.n_segments for f in scenario.model.flexible_links}
                     | (set() if quick else set(TABLE_NS)))
