@@ -50,12 +50,18 @@ def shared_runs(directory):
 
 def run_key(*parts) -> str:
     """SHA-256 hex digest of ``parts`` (systems, arrays, numbers, strings), pickled with
-    cloudpickle (numpy arrays by their bytes, dtype and shape)."""
+    cloudpickle (numpy arrays by their bytes, dtype and shape).
+
+    An object is hashed by the pickle of its pickled-and-loaded copy: the pickle of an
+    object built here and of its copy unpickled in a worker differ (shared references and
+    read-only arrays come back otherwise), while a loaded copy pickles the same again, in
+    any process (tests/test_step_pool.py checks the keys of one run in process and on a
+    cluster are the same)."""
     digest = hashlib.sha256()
     for part in parts:
         if isinstance(part, np.ndarray):
             part = (str(part.dtype), part.shape, np.ascontiguousarray(part).tobytes())
-        digest.update(cloudpickle.dumps(part))
+        digest.update(cloudpickle.dumps(cloudpickle.loads(cloudpickle.dumps(part))))
     return digest.hexdigest()
 
 

@@ -3,14 +3,17 @@
 In process (:func:`run_in_process`): each step writes straight into the run's staging
 directory and logs as it goes.  On a cluster (:func:`run_on_cluster`, the client of
 gpme_io.dask_cluster: a local cluster of one single-threaded worker process per core, or
-``--scheduler ADDRESS``): each step is one task, submitted longest first (by the step
-times of the previous report, or :data:`TYPICAL_ORDER`); a worker runs it in a temporary
-directory of its own and returns its outcome, the bytes of every file it wrote (written
-here, atomically, under the staging directory: workers on other machines need no shared
-file system) and its log records (printed here when the step ends, under its name).
-Either way the gpme runs several steps compare against are computed once
-(crosscheck.run_memo, on a directory under the staging directory that is removed before
-the report is published).
+``--scheduler ADDRESS``): every (step, scenario) pair is one task
+(crosscheck.verify_steps.run_part), submitted longest step first (by the step times of the
+previous report, or :data:`TYPICAL_ORDER`), so the models of one run spread over the
+workers too.  A worker runs its part in a temporary directory of its own and returns the
+part, the bytes of every file it wrote (written here, atomically, under the staging
+directory: workers on other machines need no shared file system) and its log records
+(printed here when the part ends).  When a step's parts are all back, its page and rows
+are made here (verify_steps.finish_step).  Either way the gpme runs several steps compare
+against are computed once (crosscheck.run_memo, on a directory under the staging
+directory, removed before the report is published; shared between the workers of one
+machine).
 """
 import logging
 import tempfile
@@ -23,13 +26,13 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 from gpme_io import dask_cluster
 from gpme_io.atomic import atomic_write_bytes
 
-from . import run_memo
-from .verify_steps import StepOutcome, run_step
+from . import run_memo, verify_steps
+from .verify_steps import PartOutcome, StepOutcome
 
 log = logging.getLogger("gpme.verify")
 # the steps, longest first, when no earlier report gives their times (crane, quick and
 # full runs of this machine, 2026-11)
-TYPICAL_ORDER = ("continuum", "exudyn", "drake", "mujoco", "pinocchio", "gpme")
+TYPICAL_ORDER = ("exudyn", "continuum", "drake", "pinocchio", "mujoco", "gpme")
 # where the shared gpme runs live during the run (under the staging directory)
 SHARED_RUNS_DIR = ".shared_runs"
 
@@ -42,7 +45,8 @@ def run_in_process(steps: Sequence[str], staging: Path, scenarios, quick, progre
     with run_memo.shared_runs(Path(staging) / SHARED_RUNS_DIR):
         for step in steps:
             log.info(f"[{step}] ...")
-            on_done(run_step(step, staging, scenarios, quick, progress, max_wall_s))
+            on_done(verify_steps.run_step(step, staging, scenarios, quick, progress,
+                                          max_wall_s))
 
 
 def submission_order(steps: Sequence[str], previous_times: Optional[Dict[str, float]]) -> List[str]:
@@ -57,43 +61,65 @@ def submission_order(steps: Sequence[str], previous_times: Optional[Dict[str, fl
 def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick, max_wall_s,
                    on_done: Callable[[StepOutcome], None],
                    previous_times: Optional[Dict[str, float]] = None) -> int:
-    """Run ``steps`` as tasks on ``client``'s cluster; write each one's files into
-    ``staging``, replay its log records and call on_done(outcome) as it ends.  Returns the
-    number of workers.  A task that raises (OutputWriteError, a lost worker) raises here."""
+    """Run the parts of ``steps`` as tasks on ``client``'s cluster; write each part's files
+    into ``staging`` and replay its log records as it ends, finish a step (its page, rows
+    and on_done(outcome)) when its parts are all back.  Returns the number of workers.  A
+    task that raises (OutputWriteError, a lost worker) raises here."""
     staging = Path(staging)
     shared = str(staging.resolve() / SHARED_RUNS_DIR)
     order = submission_order(steps, previous_times)
     workers = dask_cluster.worker_count(client)
-    log.info(f"[dask] {len(order)} steps on {workers} workers at {client.scheduler.address}, "
-             f"longest first: {', '.join(order)}")
+    plan = {}
+    for step in order:
+        chosen = verify_steps.step_scenarios(step, scenarios, quick)
+        if chosen is None:
+            on_done(verify_steps.missing_step(step, staging))
+        elif not chosen:
+            on_done(verify_steps.finish_step(step, staging, [], quick))
+        else:
+            plan[step] = chosen
+    n_parts = sum(len(c) for c in plan.values())
+    log.info(f"[dask] {n_parts} parts of {len(plan)} steps on {workers} workers at "
+             f"{client.scheduler.address}, longest step first: {', '.join(plan)}")
     token = uuid.uuid4().hex[:8]
-    futures = {client.submit(step_task, step, shared, scenarios, quick, max_wall_s,
-                             key=f"gpme-verify-{step}-{token}", pure=False,
-                             priority=len(order) - i): step
-               for i, step in enumerate(order)}
+    futures, priority = {}, n_parts
+    for step, chosen in plan.items():
+        for index, scenario in enumerate(chosen):
+            future = client.submit(part_task, step, index, scenario, shared, quick,
+                                   max_wall_s, key=f"gpme-verify-{step}-{index}-{token}",
+                                   pure=False, priority=priority)
+            futures[future] = step
+            priority -= 1
+    done: Dict[str, List[PartOutcome]] = {step: [] for step in plan}
     try:
         for future in dask_cluster.as_completed(futures):
             outcome, files, records = future.result()
             for relative, data in files.items():
                 atomic_write_bytes(staging / relative, data)
-            log.info(f"[{outcome.step}] done on a worker in {outcome.seconds:.1f} s:")
-            for name, level, message in records:
-                logging.getLogger(name).log(level, message)
-            on_done(outcome)
+            name = plan[outcome.step][outcome.index].name
+            log.info(f"[{outcome.step}] {name} done on a worker in {outcome.seconds:.1f} s")
+            for logger_name, level, message in records:
+                logging.getLogger(logger_name).log(level, message)
+            parts = done[outcome.step]
+            parts.append(outcome)
+            if len(parts) == len(plan[outcome.step]):
+                parts.sort(key=lambda p: p.index)
+                on_done(verify_steps.finish_step(outcome.step, staging, parts, quick))
     finally:
         for future in futures:
             future.cancel()
     return workers
 
 
-def step_task(step, shared_dir, scenarios, quick, max_wall_s) -> Tuple[StepOutcome, Dict[str, bytes], List[Record]]:
-    """The task a worker runs: ``step`` in a temporary directory (removed after), sharing
-    gpme runs through ``shared_dir``; returns (outcome, {relative path: bytes} of every file
-    the step wrote, its log records and warnings)."""
+def part_task(step, index, scenario, shared_dir, quick,
+              max_wall_s) -> Tuple[PartOutcome, Dict[str, bytes], List[Record]]:
+    """The task a worker runs: ``step`` on one scenario in a temporary directory (removed
+    after), sharing gpme runs through ``shared_dir``; returns (outcome, {relative path:
+    bytes} of every file it wrote, its log records and warnings)."""
     with tempfile.TemporaryDirectory(prefix=f"gpme-verify-{step}-") as tmp, \
             _recorded() as records, run_memo.shared_runs(shared_dir):
-        outcome = run_step(step, Path(tmp), scenarios, quick, False, max_wall_s)
         root = Path(tmp)
+        outcome = verify_steps.run_part(step, index, root, scenario, quick, False, max_wall_s)
         files = {str(p.relative_to(root)): p.read_bytes()
                  for p in sorted(root.rglob("*")) if p.is_file()}
     return outcome, files, records

@@ -83,7 +83,8 @@ def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
     root = report[0]
     rows = report[3]
     # the directory logic is under test, not the runs: a step that returns the first run's rows
-    monkeypatch.setattr(verify_steps, "_models_step", lambda *args, **kwargs: rows)
+    monkeypatch.setattr(verify_steps, "_gpme_part", lambda *args, **kwargs: {})
+    monkeypatch.setattr(verify_steps, "_gpme_finish", lambda *args, **kwargs: rows)
     first, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     second, _, _ = verify.run_verify(root, quick=True, only="paper", progress=False, run_id="same")
     assert first != second and first.name == "same" and second.name == "same-2"
@@ -94,9 +95,12 @@ def test_two_runs_with_the_same_id_get_two_directories(report, monkeypatch):
 def test_failing_check_gives_nonzero_exit(report, monkeypatch, capsys, tmp_path):
     root = report[0]
 
-    def broken_step(name, run_dir, scenarios, quick, progress):
-        raise RuntimeError(f"{name} engine unavailable")
-    monkeypatch.setattr(verify_steps, "_engine_step", broken_step)
+    class BrokenEngine:
+        """An engine check module whose every scenario crashes."""
+        @staticmethod
+        def scenario_part(*args, **kwargs):
+            raise RuntimeError("pinocchio engine unavailable")
+    monkeypatch.setattr(verify_steps, "_check_module", lambda step: BrokenEngine)
 
     class Args:
         out, quick, only, no_progress, model = str(root), True, "pinocchio", True, []
@@ -134,7 +138,8 @@ def test_first_run_says_there_is_nothing_to_compare(report):
 
 def test_unreadable_previous_report_is_one_line_not_a_crash(report, monkeypatch, tmp_path):
     rows = report[3]
-    monkeypatch.setattr(verify_steps, "_models_step", lambda *args, **kwargs: rows)
+    monkeypatch.setattr(verify_steps, "_gpme_part", lambda *args, **kwargs: {})
+    monkeypatch.setattr(verify_steps, "_gpme_finish", lambda *args, **kwargs: rows)
     bad = tmp_path / "old-run"
     bad.mkdir()
     (bad / "summary.json").write_text('{"run": {"run_id": "old"}, "checks": [')

@@ -151,55 +151,73 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     """Model-validity rows of every scenario; writes out_dir/checks/continuum/ and
     out_dir/continuum.html (with its plots in out_dir/continuum/)."""
     scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
-    out_dir = Path(out_dir)
     start = time.perf_counter()
+    parts = [scenario_part(out_dir, scenario, quick) for scenario in scenarios]
+    return finish(out_dir, parts, quick, time.perf_counter() - start)
+
+
+def scenario_part(out_dir: Path, scenario, quick: bool = False) -> dict:
+    """What :func:`run` computes for one scenario (its plot written under
+    ``out_dir``/continuum/): {"rows": comparison rows, "sections": page sections},
+    picklable, for :func:`finish` (crosscheck.step_pool runs scenarios in separate
+    processes)."""
+    out_dir = Path(out_dir)
     rows, sections_ = [], []
-    for scenario in scenarios:
-        t0 = time.perf_counter()
-        if not has_flexible_links(scenario.model):
-            rows.append(_info_row(scenario, "no flexible link", "the model has no RFEM link "
-                                  "(n >= 1): there is no discretisation to judge"))
-            continue
-        log.info(f"  continuum: {scenario.name}")
-        try:
-            validity = check_scenario(scenario, quick, log=lambda m: log.info(f"  {m}"))
-        except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
-            rows.append(_info_row(scenario, "not run", f"the continuum model could not be "
-                                  f"run: {type(exc).__name__}: {str(exc)[:300]}"))
-            continue
-        rows += validity.rows
-        try:
-            rows += frequency_rows(scenario, quick)
-        except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
-            rows.append(_info_row(scenario, "natural frequencies not compared",
-                                  f"{type(exc).__name__}: {str(exc)[:300]}"))
-        ns = sorted({f.n_segments for f in scenario.model.flexible_links}
-                    | {2 * f.n_segments for f in scenario.model.flexible_links}
-                    | (set() if quick else set(TABLE_NS)))
-        table_df = convergence_table(scenario, validity, ns)
-        plot = _plot(validity, scenario.model.name,
-                     out_dir / "continuum" / f"{scenario.model.name}_tip.png")
-        ref = validity.reference
-        study = pd.DataFrame([{"elements": ne, "dt (s)": h, "wall time (s)": round(w, 1)}
-                              for ne, h, w in ref.history])
-        text = [f"{scenario.model.name}: 0..{validity.horizon:g} s from the start with straight "
-                f"beams, samples every {validity.output_dt:g} s; continuum {ref.elements} "
-                f"elements per beam at dt = {ref.dt:g} s (generalized-alpha); its last mesh and "
-                "step changes per quantity: " + ", ".join(
-                    f"{c} {ref.mesh_change[c]:.2g} / {ref.step_change[c]:.2g}"
-                    for c in ref.mesh_change) + f"; {time.perf_counter() - t0:.0f} s."]
-        sections_.append(section(f"{scenario.model.name}: RFEM against the continuum", text,
-                                 table(table_df, status_column="-",
-                                       left_columns=("quantity",)),
-                                 figures=[(plot.relative_to(out_dir), "elastic tip deflection, "
-                                           "RFEM at several n and the continuum")] if plot else ()))
-        sections_.append(section(f"{scenario.model.name}: the continuum's mesh and step study",
-                                 table=table(study, status_column="-")))
+    part = {"rows": rows, "sections": sections_}
+    t0 = time.perf_counter()
+    if not has_flexible_links(scenario.model):
+        rows.append(_info_row(scenario, "no flexible link", "the model has no RFEM link "
+                              "(n >= 1): there is no discretisation to judge"))
+        return part
+    log.info(f"  continuum: {scenario.name}")
+    try:
+        validity = check_scenario(scenario, quick, log=lambda m: log.info(f"  {m}"))
+    except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
+        rows.append(_info_row(scenario, "not run", f"the continuum model could not be "
+                              f"run: {type(exc).__name__}: {str(exc)[:300]}"))
+        return part
+    rows += validity.rows
+    try:
+        rows += frequency_rows(scenario, quick)
+    except (GpmeError, RuntimeError, ValueError, exu.ExudynError) as exc:
+        rows.append(_info_row(scenario, "natural frequencies not compared",
+                              f"{type(exc).__name__}: {str(exc)[:300]}"))
+    ns = sorted({f.n_segments for f in scenario.model.flexible_links}
+                | {2 * f.n_segments for f in scenario.model.flexible_links}
+                | (set() if quick else set(TABLE_NS)))
+    table_df = convergence_table(scenario, validity, ns)
+    plot = _plot(validity, scenario.model.name,
+                 out_dir / "continuum" / f"{scenario.model.name}_tip.png")
+    ref = validity.reference
+    study = pd.DataFrame([{"elements": ne, "dt (s)": h, "wall time (s)": round(w, 1)}
+                          for ne, h, w in ref.history])
+    text = [f"{scenario.model.name}: 0..{validity.horizon:g} s from the start with straight "
+            f"beams, samples every {validity.output_dt:g} s; continuum {ref.elements} "
+            f"elements per beam at dt = {ref.dt:g} s (generalized-alpha); its last mesh and "
+            "step changes per quantity: " + ", ".join(
+                f"{c} {ref.mesh_change[c]:.2g} / {ref.step_change[c]:.2g}"
+                for c in ref.mesh_change) + f"; {time.perf_counter() - t0:.0f} s."]
+    sections_.append(section(f"{scenario.model.name}: RFEM against the continuum", text,
+                             table(table_df, status_column="-",
+                                   left_columns=("quantity",)),
+                             figures=[(plot.relative_to(out_dir), "elastic tip deflection, "
+                                       "RFEM at several n and the continuum")] if plot else ()))
+    sections_.append(section(f"{scenario.model.name}: the continuum's mesh and step study",
+                             table=table(study, status_column="-")))
+    return part
+
+
+def finish(out_dir: Path, parts, quick: bool, wall: float) -> pd.DataFrame:
+    """The scenarios' parts (:func:`scenario_part`, in scenario order) as one table: its rows
+    and out_dir/continuum.html written (atomically), the table returned.  wall: s."""
+    out_dir = Path(out_dir)
+    rows = [r for part in parts for r in part["rows"]]
+    sections_ = [x for part in parts for x in part["sections"]]
     df = pd.DataFrame(rows)
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
-    intro = [f"{len(df)} comparisons over {len(scenarios)} scenarios; "
-             f"{'quick' if quick else 'full'} run, {time.perf_counter() - start:.1f} s."]
+    intro = [f"{len(df)} comparisons over {len(parts)} scenarios; "
+             f"{'quick' if quick else 'full'} run, {wall:.1f} s."]
     atomic_write_text(out_dir / "continuum.html", comparison_page(
         ENGINE, "RFEM vs continuum beams (model validity)", exu.__version__, df, intro,
         sections_, CONVENTIONS))

@@ -368,39 +368,56 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     if unknown:
         raise ValueError(f"unknown sections {unknown}; choose from {SECTIONS}")
     scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
-    out_dir = Path(out_dir)
-    plan = QUICK if quick else FULL
     start = time.perf_counter()
-    frames, records = [], []
+    parts = []
     bar = _progress(progress, len(scenarios))
     for scenario in scenarios:
-        refused = inertia_gate.refusal(ENGINE, scenario)
-        if refused:
-            log.info("%s: %s", scenario.name, refused)
-            frames.append(pd.DataFrame([{**inertia_gate.refusal_row(ENGINE, scenario, refused),
-                                         "section": "terms"}]))
-            if bar:
-                bar.update()
-            continue
-        if "terms" in sections:
-            try:
-                df, record = terms_section(scenario, out_dir, plan)
-                frames.append(df)
-                records.append(record)
-            except GpmeError as exc:     # a model Drake cannot express is a failed check
-                frames.append(pd.DataFrame([_failed_row(scenario, "terms", "terms", exc)]))
-        if "runs" in sections:
-            try:
-                rows = run_section(scenario, quick, log.info, urdf_dir=out_dir / URDF_SUBDIR)
-            except GpmeError as exc:
-                rows = [_failed_row(scenario, "runs", "free run", exc)]
-            frames.append(pd.DataFrame(rows).assign(section="runs"))
+        parts.append(scenario_part(out_dir, scenario, quick, sections))
         if bar:
             bar.update()
     if bar:
         bar.close()
+    return finish(out_dir, parts, quick, time.perf_counter() - start)
+
+
+def scenario_part(out_dir: Path, scenario, quick: bool = False,
+                  sections: Sequence[str] = SECTIONS) -> dict:
+    """What :func:`run` computes for one scenario (files it writes go under ``out_dir``):
+    {"frames": row tables, "records": term records}, picklable, for :func:`finish`
+    (crosscheck.step_pool runs scenarios in separate processes)."""
+    out_dir = Path(out_dir)
+    plan = QUICK if quick else FULL
+    frames, records = [], []
+    refused = inertia_gate.refusal(ENGINE, scenario)
+    if refused:
+        log.info("%s: %s", scenario.name, refused)
+        frames.append(pd.DataFrame([{**inertia_gate.refusal_row(ENGINE, scenario, refused),
+                                     "section": "terms"}]))
+        return {"frames": frames, "records": records}
+    if "terms" in sections:
+        try:
+            df, record = terms_section(scenario, out_dir, plan)
+            frames.append(df)
+            records.append(record)
+        except GpmeError as exc:     # a model Drake cannot express is a failed check
+            frames.append(pd.DataFrame([_failed_row(scenario, "terms", "terms", exc)]))
+    if "runs" in sections:
+        try:
+            rows = run_section(scenario, quick, log.info, urdf_dir=out_dir / URDF_SUBDIR)
+        except GpmeError as exc:
+            rows = [_failed_row(scenario, "runs", "free run", exc)]
+        frames.append(pd.DataFrame(rows).assign(section="runs"))
+    return {"frames": frames, "records": records}
+
+
+def finish(out_dir: Path, parts: Sequence[dict], quick: bool, wall: float) -> pd.DataFrame:
+    """The scenarios' parts (:func:`scenario_part`, in scenario order) as one table: its rows
+    (crosscheck.reports.rows) and out_dir/drake.html written (atomically), the table
+    returned.  wall: s, the time the parts took."""
+    out_dir = Path(out_dir)
+    frames = [f for part in parts for f in part["frames"]]
+    records = [r for part in parts for r in part["records"]]
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
-    wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
     atomic_write_text(out_dir / "drake.html", _html(df, records, wall, quick))

@@ -123,33 +123,49 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     if unknown:
         raise ValueError(f"unknown sections {unknown}; choose from {SECTIONS}")
     scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
-    out_dir = Path(out_dir)
     start = time.perf_counter()
-    rows, timings = [], []
+    parts = []
     bar = _progress(progress, len(scenarios))
     for scenario in scenarios:
-        t0 = time.perf_counter()
-        if "model" in sections:
-            try:
-                rows += model_rows(scenario, quick)
-            except (GpmeError, exu.ExudynError, RuntimeError) as exc:
-                rows.append(_failed(scenario, "model", exc))
-        if "runs" in sections:
-            try:
-                rows += exu_runs.run_section(scenario, quick, log.info)
-            except (GpmeError, ValueError, RuntimeError, exu.ExudynError) as exc:
-                # a run that cannot be made (or a model Exudyn refuses) is a failed row
-                rows.append(_failed(scenario, "runs", exc))
-        timings.append((scenario.name, time.perf_counter() - t0))
+        parts.append(scenario_part(out_dir, scenario, quick, sections))
         if bar:
             bar.update()
     if bar:
         bar.close()
-    df = pd.DataFrame(rows)
-    wall = time.perf_counter() - start
+    return finish(out_dir, parts, quick, time.perf_counter() - start)
+
+
+def scenario_part(out_dir: Path, scenario, quick: bool = False,
+                  sections: Sequence[str] = SECTIONS) -> dict:
+    """What :func:`run` computes for one scenario: {"rows": comparison rows, "timing":
+    (scenario name, s)}, picklable, for :func:`finish` (crosscheck.step_pool runs scenarios
+    in separate processes).  Writes no file."""
+    t0 = time.perf_counter()
+    rows = []
+    if "model" in sections:
+        try:
+            rows += model_rows(scenario, quick)
+        except (GpmeError, exu.ExudynError, RuntimeError) as exc:
+            rows.append(_failed(scenario, "model", exc))
+    if "runs" in sections:
+        try:
+            rows += exu_runs.run_section(scenario, quick, log.info)
+        except (GpmeError, ValueError, RuntimeError, exu.ExudynError) as exc:
+            # a run that cannot be made (or a model Exudyn refuses) is a failed row
+            rows.append(_failed(scenario, "runs", exc))
+    return {"rows": rows, "timing": (scenario.name, time.perf_counter() - t0)}
+
+
+def finish(out_dir: Path, parts: Sequence[dict], quick: bool, wall: float) -> pd.DataFrame:
+    """The scenarios' parts (:func:`scenario_part`, in scenario order) as one table: its rows
+    (crosscheck.reports.rows) and out_dir/exudyn.html written (atomically), the table
+    returned.  wall: s, the time the parts took."""
+    out_dir = Path(out_dir)
+    df = pd.DataFrame([r for part in parts for r in part["rows"]])
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
-    atomic_write_text(out_dir / "exudyn.html", _html(df, timings, wall, quick))
+    atomic_write_text(out_dir / "exudyn.html",
+                      _html(df, [part["timing"] for part in parts], wall, quick))
     return df
 
 

@@ -280,8 +280,16 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
     """Run every section for every scenario (gpme_io.scenario.Scenario; None: the crane
     rigid and n = 1 on the constraints), write its rows (crosscheck.reports.rows), plots and
     out_dir/mujoco.html atomically and return the tidy table (columns status: pass / fail / info, passed)."""
-    out_dir = Path(out_dir)
     scenarios = list(default_scenarios(quick) if scenarios is None else scenarios)
+    parts = [scenario_part(out_dir, s, quick, progress) for s in scenarios]
+    return finish(out_dir, parts, quick, progress=progress)
+
+
+def scenario_part(out_dir: Path, s, quick: bool = False, progress: bool = False) -> dict:
+    """What :func:`run` computes for one scenario ``s``: {"name": its name, "rows":
+    comparison rows, "plots": {(section, name): (model, gpme run, MuJoCo run)}, "tables":
+    convergence tables}, picklable, for :func:`finish` (crosscheck.step_pool runs scenarios in separate
+    processes).  Writes no file."""
     p = cases.plan(quick)
     start = time.perf_counter()
 
@@ -290,47 +298,61 @@ def run(out_dir: Path, scenarios=None, quick: bool = False,
             logger.info(f"[mujoco {time.perf_counter() - start:6.1f} s] {msg}")
 
     plots, rows, tables = {}, [], []
-    for s in scenarios:
-        refused = inertia_gate.refusal(ENGINE, s)
-        if refused:
-            log(f"{s.name}: {refused}")
-            rows += _tag([inertia_gate.refusal_row(ENGINE, s, refused)], "terms", "all",
-                         "not compared")
-            continue
-        rows += terms_section(s, p, log)
-        skip = run_gates.over_budget(p.t_end(s), _dt(s))
-        if skip:
-            log(f"runs {s.name}: {skip}")
-            rows += _tag([compare(ENGINE, s.name, "runs: not run", f"{p.t_end(s):g} s", [0.0],
-                                  [0.0], _info(skip), ["-"])], "exact", "all", "not run")
-            continue
-        rows += free_section(s, p, log, plots)
-        exact_rows, refined, start_state = exact_section(s, p, log, plots)
-        rows += exact_rows
-        loops, why = mj_loops.native_loops(s)
-        if loops:
-            loop_rows, table = loops_section(s, loops, refined, start_state, p, log, plots)
-            rows += loop_rows
-            tables.append(table)
-        elif why:
-            rows += _tag([compare(ENGINE, s.name, "loops: not compared", "MuJoCo's own loop "
-                                  "equalities", [0.0], [0.0], _info(why), ["-"])],
-                         "loops", "all", "not compared")
-        prog = cases.programme(s)
-        if prog is not None:
-            mech_rows, table = mechanism_section(s, prog, refined, start_state, p, log, plots)
-            rows += mech_rows
-            tables.append(table)
-            rows += off_manifold_section(s, prog, p, log, plots)
+    part = {"name": s.name, "rows": rows, "plots": plots, "tables": tables}
+    refused = inertia_gate.refusal(ENGINE, s)
+    if refused:
+        log(f"{s.name}: {refused}")
+        rows += _tag([inertia_gate.refusal_row(ENGINE, s, refused)], "terms", "all",
+                     "not compared")
+        return part
+    rows += terms_section(s, p, log)
+    skip = run_gates.over_budget(p.t_end(s), _dt(s))
+    if skip:
+        log(f"runs {s.name}: {skip}")
+        rows += _tag([compare(ENGINE, s.name, "runs: not run", f"{p.t_end(s):g} s", [0.0],
+                              [0.0], _info(skip), ["-"])], "exact", "all", "not run")
+        return part
+    rows += free_section(s, p, log, plots)
+    exact_rows, refined, start_state = exact_section(s, p, log, plots)
+    rows += exact_rows
+    loops, why = mj_loops.native_loops(s)
+    if loops:
+        loop_rows, table = loops_section(s, loops, refined, start_state, p, log, plots)
+        rows += loop_rows
+        tables.append(table)
+    elif why:
+        rows += _tag([compare(ENGINE, s.name, "loops: not compared", "MuJoCo's own loop "
+                              "equalities", [0.0], [0.0], _info(why), ["-"])],
+                     "loops", "all", "not compared")
+    prog = cases.programme(s)
+    if prog is not None:
+        mech_rows, table = mechanism_section(s, prog, refined, start_state, p, log, plots)
+        rows += mech_rows
+        tables.append(table)
+        rows += off_manifold_section(s, prog, p, log, plots)
+    return part
+
+
+def finish(out_dir: Path, parts, quick: bool, wall: float = None,
+           progress: bool = False) -> pd.DataFrame:
+    """The scenarios' parts (:func:`scenario_part`, in scenario order) as one table: its
+    rows, plots, motion pages and out_dir/mujoco.html written (atomically), the table
+    returned.  wall: s, the time the parts took (this page does not show it)."""
+    out_dir = Path(out_dir)
+    rows = [r for part in parts for r in part["rows"]]
+    plots = {k: v for part in parts for k, v in part["plots"].items()}
+    tables = [t for part in parts for t in part["tables"]]
     rows += wall_time_rows(plots)
     df = pd.DataFrame(rows)
     front = ["section", "case", "model", "coordinate", "metric"]
     df = df[front + [c for c in df.columns if c not in front]]
     convergence = pd.concat(tables, ignore_index=True) if tables else pd.DataFrame()
-    write_report(out_dir, df, convergence, plots, quick, [s.name for s in scenarios])
+    write_report(out_dir, df, convergence, plots, quick, [part["name"] for part in parts])
     for (section, name), (model, gpme_run, mujoco_run) in plots.items():
         if section == "exact":        # gpme's motion with MuJoCo's as a ghost, overlaid
             write_motion(model, gpme_run, named_path(out_dir, f"mujoco_{name}", "_motion.html"),
                          "exact programmed run, gpme", overlay=("MuJoCo", mujoco_run))
-    log(f"written the rows under {out_dir / 'checks'} and {out_dir / 'mujoco.html'}")
+    if progress:
+        logger.info(f"[mujoco] written the rows under {out_dir / 'checks'} and "
+                    f"{out_dir / 'mujoco.html'}")
     return df

@@ -357,48 +357,68 @@ def run(out_dir: Path, scenarios: Optional[Sequence] = None, quick: bool = False
     if unknown:
         raise ValueError(f"unknown sections {unknown}; choose from {SECTIONS}")
     scenarios = default_scenarios(quick) if scenarios is None else list(scenarios)
-    out_dir = Path(out_dir)
-    plan = QUICK if quick else FULL
     start = time.perf_counter()
-    frames, records, skipped = [], [], []
+    parts = []
     bar = _progress(progress, len(scenarios))
     for scenario in scenarios:
-        if "terms" in sections:
-            cases = model_cases(scenario, out_dir / "urdf")
-            if scenario.urdf is not None and len(cases) < 3:
-                skipped.append(f"{scenario.name}: no original-URDF case (the model has "
-                               "flexible links, which the user's URDF does not describe)")
-            states = scenario_states(scenario, plan)
-            for case in cases:
-                if case.system.model.coordinate_names != scenario.model.coordinate_names:
-                    raise ValueError(f"{case.label}: coordinates "
-                                     f"{case.system.model.coordinate_names} differ from the "
-                                     f"scenario's {scenario.model.coordinate_names}")
-                df = compare_case(case, states)
-                frames.append(df.assign(section="terms"))
-                data = case.pin.model.createData()
-                records.append(CaseRecord(
-                    case.label, case.kind, scenario.name, case.system.model.n_coordinates,
-                    case.pin.model.nq, len(states),
-                    _crba(case.pin.model, data, case.pin.q_pin(states[0].q))[1],
-                    case.pin.notes))
-                log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
-                         int((~df["passed"]).sum()))
-        if "runs" in sections:
-            try:
-                rows = run_section(scenario, quick, log.info)
-            except GpmeError as exc:     # a run that cannot be made is a failed check
-                rows = [compare(ENGINE, scenario.name, "exact programmed run: failed",
-                                "run", [np.nan], [0.0], Tolerance(0.0, 0.0, f"the run failed: "
-                                f"{exc}"[:500]), ["-"])]
-            frames.append(pd.DataFrame(rows).assign(
-                section=[r.get("section", "runs") for r in rows]))
+        parts.append(scenario_part(out_dir, scenario, quick, sections))
         if bar:
             bar.update()
     if bar:
         bar.close()
+    return finish(out_dir, parts, quick, time.perf_counter() - start)
+
+
+def scenario_part(out_dir: Path, scenario, quick: bool = False,
+                  sections: Sequence[str] = SECTIONS) -> dict:
+    """What :func:`run` computes for one scenario (files it writes go under ``out_dir``):
+    {"frames": row tables, "records": CaseRecord list, "skipped": notes}, picklable, for
+    :func:`finish` (crosscheck.step_pool runs scenarios in separate processes)."""
+    out_dir = Path(out_dir)
+    plan = QUICK if quick else FULL
+    frames, records, skipped = [], [], []
+    if "terms" in sections:
+        cases = model_cases(scenario, out_dir / "urdf")
+        if scenario.urdf is not None and len(cases) < 3:
+            skipped.append(f"{scenario.name}: no original-URDF case (the model has "
+                           "flexible links, which the user's URDF does not describe)")
+        states = scenario_states(scenario, plan)
+        for case in cases:
+            if case.system.model.coordinate_names != scenario.model.coordinate_names:
+                raise ValueError(f"{case.label}: coordinates "
+                                 f"{case.system.model.coordinate_names} differ from the "
+                                 f"scenario's {scenario.model.coordinate_names}")
+            df = compare_case(case, states)
+            frames.append(df.assign(section="terms"))
+            data = case.pin.model.createData()
+            records.append(CaseRecord(
+                case.label, case.kind, scenario.name, case.system.model.n_coordinates,
+                case.pin.model.nq, len(states),
+                _crba(case.pin.model, data, case.pin.q_pin(states[0].q))[1],
+                case.pin.notes))
+            log.info("%s: %d states, %d rows, %d failing", case.label, len(states), len(df),
+                     int((~df["passed"]).sum()))
+    if "runs" in sections:
+        try:
+            rows = run_section(scenario, quick, log.info)
+        except GpmeError as exc:     # a run that cannot be made is a failed check
+            rows = [compare(ENGINE, scenario.name, "exact programmed run: failed",
+                            "run", [np.nan], [0.0], Tolerance(0.0, 0.0, f"the run failed: "
+                            f"{exc}"[:500]), ["-"])]
+        frames.append(pd.DataFrame(rows).assign(
+            section=[r.get("section", "runs") for r in rows]))
+    return {"frames": frames, "records": records, "skipped": skipped}
+
+
+def finish(out_dir: Path, parts: Sequence[dict], quick: bool, wall: float) -> pd.DataFrame:
+    """The scenarios' parts (:func:`scenario_part`, in scenario order) as one table: its rows
+    (crosscheck.reports.rows) and out_dir/pinocchio.html written (atomically), the table
+    returned.  wall: s, the time the parts took."""
+    out_dir = Path(out_dir)
+    frames = [f for part in parts for f in part["frames"]]
+    records = [r for part in parts for r in part["records"]]
+    skipped = [s for part in parts for s in part["skipped"]]
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
-    wall = time.perf_counter() - start
     out_dir.mkdir(parents=True, exist_ok=True)
     write_rows(own_rows(df, ENGINE), out_dir, ENGINE)
     atomic_write_text(out_dir / "pinocchio.html",
