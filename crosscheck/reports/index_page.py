@@ -246,6 +246,8 @@ def _meta_items(meta):
     items = [("date", meta["date_utc"]), ("git commit", meta["git_commit"]),
              ("mode", "quick (CI-sized)" if meta.get("quick") else "full"),
              ("wall time", f"{meta['wall_time_s']:.1f} s")]
+    if meta.get("execution"):
+        items.append(("steps ran", meta["execution"]))
     items += [(f"{k} time", f"{v:.1f} s") for k, v in meta.get("step_times_s", {}).items()]
     items += list(meta["versions"].items())
     m = meta["machine"]
