@@ -1,0 +1,245 @@
+"""The cost of one integration step inside each engine's own loop, side by side in one
+process (issue 29).
+
+    python -m benchmarks.in_loop [--n-rfe 0 5 20 50] [--no-ur5] [--repeats 3]
+
+Cases: the paper's crane at each n_rfe, free (no constraints, drive torque 0: the same
+equations in every engine, no callback into Python) and programmed (gpme: the exact
+GPME constraints with Baumgarte terms; MuJoCo: the auxiliary mechanism of
+crosscheck.mujoco.mjcf with soft equalities, its own realisation of the same task), and
+the UR5 example with its flexible forearm (models/ur5_flexible_forearm.toml), free.
+
+Loops timed (each engine's own loop, no Python between steps where the engine has one):
+
+* gpme RK4       : gpme_core.integrate.simulate(..., method="RK4", compiled=True), one
+                   compiled call for the whole run (output only at the end)
+* gpme RadauIIA  : the same with method="RadauIIA" (its own dt, below)
+* MuJoCo RK4     : mujoco.rollout.rollout (C loop of mj_step), integrator RK4
+* MuJoCo implicitfast : the same, MuJoCo's implicit-in-velocity Euler (first order)
+* Pinocchio      : pin.aba (free) or pin.forwardDynamics with the constraint rows
+                   (programmed; benchmarks.engines.PinocchioConstrained) inside a Python
+                   RK4 loop: Pinocchio's Python bindings have no compiled loop of their
+                   own, so this row carries Python's overhead and is reported as such
+
+Cost per step = (wall time of a run of N2 steps - that of N1 = N2 / 5 steps) / (N2 - N1):
+the marginal cost, without set-up, compilation or the first call; N2 is the steps of
+MAX_SIMULATED_S, each run timed as the best of as many runs as fit in TIMED_S.  Best of ``--repeats``, the engines interleaved within
+each repeat so the machine's load affects them alike; the 1-minute load average is
+printed.  The same work: every engine starts from the same state (a seeded start
+velocity, so every coordinate moves; projected onto the constraints when programmed) and
+the states after COMPARED_STEPS steps are compared with gpme's RK4 (max |q - q_gpme|, rad
+or m): RK4 against RK4 at the same step agrees to round-off (free), MuJoCo's programmed
+run differs by its soft constraints' error, implicitfast by its first-order error.
+"""
+import argparse
+import os
+import time
+
+import mujoco
+import numpy as np
+import pandas as pd
+import pinocchio as pin
+from mujoco import rollout
+
+from benchmarks.engines import PinocchioConstrained
+from crosscheck.mujoco import mechanism as mech
+from crosscheck.mujoco.mjcf import mjcf_text
+from crosscheck.mujoco.sim import chain_map, set_state
+from crosscheck.pinocchio.model import from_gpme
+from gpme_core.blas_threads import single_threaded_blas
+from gpme_core.gpme import ProgrammedMotion
+from gpme_core.integrate import simulate
+from gpme_examples.crane import CraneParameters, crane_system, initial_state
+from gpme_io.modelfile import load_model_files
+
+RK4_DT = {0: 1e-4, 5: 2e-5, 20: 5e-6, 50: 2e-6}     # s, inside RK4's stability limit
+RADAU_DT = 1e-3                                       # s, RadauIIA's step (docs/benchmarks.md)
+COMPARED_STEPS = 2000        # the states are compared after this many steps
+TIMED_S = 0.3                # s, each loop's timed runs take about this long per repeat
+MAX_SIMULATED_S = 0.25       # s, no timed run goes further (the free crane's arm leaves its
+                             # joint range after ~0.5 s from the seeded start)
+START_SPEED = 0.3            # rad/s or m/s, largest entry of the seeded start velocity
+
+
+def _load():
+    try:
+        return os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return float("nan")
+
+
+def gpme_final(system, q0, qd0, dt, steps, method="RK4"):
+    """(q after ``steps`` steps (n,), wall time s) of gpme's compiled loop."""
+    t_end = steps * dt
+    start = time.perf_counter()
+    run = simulate(system, t_end, q0, qd0, dt=dt, output_dt=t_end, method=method,
+                   compiled=True)
+    wall = time.perf_counter() - start
+    if not run.attrs.get("compiled"):
+        raise RuntimeError(f"{system.model.name}: the compiled loop did not run")
+    return run[list(system.model.coordinate_names)].to_numpy(float)[-1], wall
+
+
+class MujocoLoop:
+    """MuJoCo's rollout of the model from one state."""
+
+    def __init__(self, model, q0, qd0, dt, integrator, specs=None):
+        self.mj = mujoco.MjModel.from_xml_string(mjcf_text(model, dt, specs))
+        self.mj.opt.integrator = integrator
+        self.mj.opt.timestep = dt
+        # a diverged run must show as NaN, not restart from qpos0 (MuJoCo's autoreset)
+        self.mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+        self.data = mujoco.MjData(self.mj)
+        self.cmap = chain_map(self.mj, model)
+        aux = None
+        if specs:
+            programme = mech.read_programme(model, specs)
+            p_e, v_e = mech.frame_motion(model, programme.frame, q0, qd0)
+            aux = mech.auxiliary_state(programme, p_e, v_e, 0.0)
+        set_state(self.mj, self.data, self.cmap, q0, qd0, 0.0, aux)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        self.state0 = np.empty(mujoco.mj_stateSize(self.mj, spec))
+        mujoco.mj_getState(self.mj, self.data, self.state0, spec)
+
+    def final(self, steps):
+        start = time.perf_counter()
+        states, _ = rollout.rollout(self.mj, self.data, self.state0, nstep=steps)
+        wall = time.perf_counter() - start
+        # FULLPHYSICS: time, qpos, qvel, act, ...
+        qpos = states[0, -1, 1:1 + self.mj.nq]
+        return qpos[self.cmap.qpos], wall
+
+
+def pinocchio_final(system, q0, qd0, dt, steps, free):
+    """(q after ``steps`` RK4 steps, wall s) with Pinocchio's aba (free) or its constrained
+    forward dynamics, in a Python loop."""
+    if free:
+        ps = from_gpme(system.model)
+        pm, data = ps.model, ps.model.createData()
+
+        def acc(t, q, v):
+            return pin.aba(pm, data, q, v, ps.applied_forces(q, v, system.model.drive_forces(t)))
+    else:
+        acc = PinocchioConstrained(system).accelerations
+    q, v = np.array(q0, float), np.array(qd0, float)
+    h = dt
+    start = time.perf_counter()
+    for k in range(steps):
+        t = k * h
+        a1 = acc(t, q, v)
+        q2, v2 = q + 0.5 * h * v, v + 0.5 * h * a1
+        a2 = acc(t + 0.5 * h, q2, v2)
+        q3, v3 = q + 0.5 * h * v2, v + 0.5 * h * a2
+        a3 = acc(t + 0.5 * h, q3, v3)
+        q4, v4 = q + h * v3, v + h * a3
+        a4 = acc(t + h, q4, v4)
+        q = q + h / 6.0 * (v + 2 * v2 + 2 * v3 + v4)
+        v = v + h / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
+    return q, time.perf_counter() - start
+
+
+def start_velocity(n, seed=20261126):
+    """(n,) seeded start velocity, entries uniform in +-START_SPEED (rad/s or m/s)."""
+    return np.random.default_rng(seed).uniform(-START_SPEED, START_SPEED, n)
+
+
+def _cases(n_values, ur5):
+    """(name, system, q0, qd0, rk4 dt, free) of every case."""
+    params = CraneParameters(drive_torque=0.0)
+    out = []
+    for n in n_values:
+        programmed = crane_system(n, params)
+        q0, _ = initial_state(programmed.model, params)
+        qd0 = start_velocity(len(q0))
+        free = ProgrammedMotion(programmed.model, [])
+        out.append((f"crane n_rfe={n} free", free, q0, qd0, RK4_DT[n], True))
+        qc, qdc = programmed.consistent_state(0.0, q0, qd0)
+        out.append((f"crane n_rfe={n} programmed", programmed, qc, qdc, RK4_DT[n], False))
+    if ur5:
+        (scenario,) = load_model_files(["models/ur5_flexible_forearm.toml"])
+        free = ProgrammedMotion(scenario.model, [])
+        out.append(("ur5 flexible forearm free", free, scenario.q0,
+                    start_velocity(len(scenario.q0)), scenario.dt, True))
+    return out
+
+
+def _best_wall(f, steps):
+    """s, the shortest wall time of f(steps) over as many calls as fit in TIMED_S / 2."""
+    best, spent = np.inf, 0.0
+    while spent < TIMED_S / 2 or best == np.inf:
+        _, wall = f(steps)
+        best, spent = min(best, wall), spent + wall
+    return best
+
+
+def measure(name, system, q0, qd0, dt, free, repeats):
+    """Rows {engine, loop, us_per_step, max_state_difference} of one case."""
+    specs = None if free else system.constraint_specs
+    loops = {}
+    loops[("gpme", f"RK4 dt={dt:g}")] = lambda s: gpme_final(system, q0, qd0, dt, s)
+    loops[("gpme", f"RadauIIA dt={RADAU_DT:g}")] = lambda s: gpme_final(
+        system, q0, qd0, RADAU_DT, s, "RadauIIA")
+    for label, integrator in (("RK4", mujoco.mjtIntegrator.mjINT_RK4),
+                              ("implicitfast", mujoco.mjtIntegrator.mjINT_IMPLICITFAST)):
+        try:
+            loop = MujocoLoop(system.model, q0, qd0, dt, integrator, specs)
+            loops[("mujoco", f"{label} dt={dt:g}")] = loop.final
+        except Exception as exc:      # a model MuJoCo's MJCF writer cannot realise
+            print(f"  {name}: MuJoCo {label} not run: {type(exc).__name__}: {exc}")
+    loops[("pinocchio", f"RK4 dt={dt:g} (Python loop)")] = lambda s: pinocchio_final(
+        system, q0, qd0, dt, s, free)
+    finals = {}
+    for key, f in loops.items():                  # compile, load, first calls
+        f(10)
+        if "RadauIIA" not in key[1]:
+            finals[key] = f(COMPARED_STEPS)[0]
+    best = {k: np.inf for k in loops}
+    for _ in range(repeats):
+        for key, f in loops.items():
+            step = RADAU_DT if "RadauIIA" in key[1] else dt
+            n2 = int(round(MAX_SIMULATED_S / step))
+            n1 = n2 // 5
+            w1, w2 = _best_wall(f, n1), _best_wall(f, n2)
+            best[key] = min(best[key], (w2 - w1) / (n2 - n1) * 1e6)
+    ref = finals[("gpme", f"RK4 dt={dt:g}")]
+    rows = []
+    for key in loops:
+        diff = float(np.max(np.abs(finals[key] - ref))) if key in finals else float("nan")
+        rows.append({"case": name, "coordinates": len(q0), "engine": key[0], "loop": key[1],
+                     "us_per_step": best[key], "max_state_difference": diff})
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
+    parser.add_argument("--no-ur5", action="store_true")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    print(f"load average {_load():.2f}; gpme {_version('gpme')}, mujoco {mujoco.__version__}, "
+          f"pinocchio {pin.__version__}")
+    rows = []
+    with single_threaded_blas():
+        for case in _cases(args.n_rfe, not args.no_ur5):
+            print(f"{case[0]} ...", flush=True)
+            rows += measure(*case, args.repeats)
+    table = pd.DataFrame(rows)
+    for case, group in table.groupby("case", sort=False):
+        mj = group[group["loop"].str.startswith("RK4") & (group["engine"] == "mujoco")]
+        gp = group[group["loop"].str.startswith("RK4") & (group["engine"] == "gpme")]
+        ratio = (gp["us_per_step"].iloc[0] / mj["us_per_step"].iloc[0]) if len(mj) else np.nan
+        print(f"\n{case} ({group['coordinates'].iloc[0]} coordinates): gpme RK4 / MuJoCo RK4 "
+              f"= {ratio:.2f}")
+        print(group[["engine", "loop", "us_per_step", "max_state_difference"]]
+              .to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    print(f"\nload average {_load():.2f}")
+    return table
+
+
+def _version(dist):
+    from importlib import metadata
+    return metadata.version(dist)
+
+
+if __name__ == "__main__":
+    main()
