@@ -1,14 +1,20 @@
 """Where the time of one compiled GPME evaluation goes (a profile of gpme_core.kernels).
 
-    python -m benchmarks.kernel_profile [--n-rfe 0 5 20 50]
+    python -m benchmarks.kernel_profile [--n-rfe 0 5 20 50] [--cholesky]
 
 cProfile cannot see inside compiled code, so each part of gpme_core.kernels.evaluate is
 timed on its own, called in a compiled loop (no Python between calls), on the crane at
 a seeded off-equilibrium state: the chain kinematics (T, S), the trace-form terms (M, h,
 g), the constraint rows (Phi, Phi_dot, A, kappa), the reduced solve (Gamma, N^T M N, its
-Cholesky factor, q_ddot, multipliers), and the whole evaluation.  Microseconds per call,
-best of 5 batches, LAPACK on one thread as in the compiled runs; the parts add up to the
-whole within the spring, damper and drive forces and the workspace carving.
+Cholesky factor, q_ddot, multipliers), the whole evaluation, and one step of the compiled
+RK4 loop (kernels.rk4_advance, four evaluations and the stage updates; a step of 1e-8 s so
+that the state stays where the parts were timed).  Microseconds per call, best of 5
+batches, LAPACK on one thread as in the compiled runs; the parts add up to the whole
+within the spring, damper and drive forces and the workspace carving.
+
+``--cholesky`` adds the table behind kernels.LAPACK_FROM: the factor of an r x r symmetric
+positive definite matrix by kernels' own loops against LAPACK's (numpy.linalg.cholesky
+inside numba: the call, a copy and the factor), microseconds per factor.
 """
 import argparse
 import timeit
@@ -60,6 +66,28 @@ def _loop_evaluate(count, t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
         kernels.evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws)
 
 
+@numba.njit
+def _loop_rk4(count, y, md, cd, opts, ic, dc, fail_y):
+    for _ in range(count):
+        kernels.rk4_advance(0.0, y, RK4_STEP, 1, md, cd, opts, ic, dc, fail_y)
+
+
+@numba.njit
+def _loop_factor_loops(count, mat, low):
+    for _ in range(count):
+        kernels._cholesky_factor(mat, low)
+
+
+@numba.njit
+def _loop_factor_lapack(count, mat):
+    for _ in range(count):
+        np.linalg.cholesky(mat)
+
+
+RK4_STEP = 1e-8         # s: the RK4 column's step (the state hardly moves over a batch)
+CHOLESKY_SIZES = (8, 16, 24, 32, 40, 48, 56, 64, 100, 152)
+
+
 def _us(fn, *args):
     fn(1, *args)                                        # compile
     return 1e6 * min(timeit.repeat(lambda: fn(BATCH, *args), number=1, repeat=5)) / BATCH
@@ -83,6 +111,7 @@ def profile(n_rfe, t=0.37, seed=0):
                             np.empty(kernels.rows_scratch_size(n, cs.n_points)))
     c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
     out = np.empty(n), np.empty(k)
+    y = np.concatenate([q, q_dot, np.zeros(kernels.N_WORK)])
     return {"n_rfe": n_rfe, "coordinates": n,
             "chain T, S": _us(_loop_chain, md, q),
             "terms M, h, g": _us(_loop_terms, md, t_all, s_all, q_dot),
@@ -90,22 +119,45 @@ def profile(n_rfe, t=0.37, seed=0):
                                    a, kappa),
             "reduced solve": _us(_loop_reduced, m_mat, h - g, a, c, system.ic, system.dc, *out),
             "whole evaluate": _us(_loop_evaluate, t, q, q_dot, md, cd, cs.options(),
-                                  system.ic, system.dc, *out, np.empty(kernels.INFO_SIZE))}
+                                  system.ic, system.dc, *out, np.empty(kernels.INFO_SIZE)),
+            "RK4 step": _us(_loop_rk4, y, md, cd, cs.options(), system.ic, system.dc,
+                            np.empty_like(y))}
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
-    args = parser.parse_args(argv)
-    with blas_threads.single_threaded_blas():      # as in the compiled runs
-        rows = [profile(n) for n in args.n_rfe]
+def cholesky_table(sizes=CHOLESKY_SIZES, seed=0):
+    """[{r, loops, LAPACK}]: microseconds per Cholesky factor of an r x r SPD matrix."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for r in sizes:
+        half = rng.standard_normal((r, r))
+        mat = half @ half.T + r * np.eye(r)
+        rows.append({"r": r, "loops": _us(_loop_factor_loops, mat, np.zeros((r, r))),
+                     "LAPACK": _us(_loop_factor_lapack, mat)})
+    return rows
+
+
+def _print_table(rows):
     keys = list(rows[0])
     print("| " + " | ".join(keys) + " |")
     print("|" + "---|" * len(keys))
     for r in rows:
         print("| " + " | ".join(f"{r[k]:.1f}" if isinstance(r[k], float) else str(r[k])
                                 for k in keys) + " |")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--n-rfe", type=int, nargs="+", default=[0, 5, 20, 50])
+    parser.add_argument("--cholesky", action="store_true",
+                        help="also time the Cholesky factor: kernels' loops against LAPACK")
+    args = parser.parse_args(argv)
+    with blas_threads.single_threaded_blas():      # as in the compiled runs
+        _print_table([profile(n) for n in args.n_rfe])
+        if args.cholesky:
+            print(f"\nCholesky factor of an r x r matrix, us (kernels.LAPACK_FROM = "
+                  f"{kernels.LAPACK_FROM})")
+            _print_table(cholesky_table())
     return 0
 
 

@@ -112,8 +112,8 @@ RFEM = "gpme_core/rfem.py"
 CATALOGUE = (
     # ------------------------------------------------ trace-form terms (gpme_core/fast.py)
     Fault("M-composite", MASS_MATRIX, FAST,
-          "hc[l, i, j] = hw[l, i, j]",
-          "hc[l, i, j] = 1.001 * hw[l, i, j]", 1e-3,
+          "column[i] = (s6[0, i] * e0",
+          "column[i] = 1.001 * (s6[0, i] * e0", 1e-3,
           "the composite world pseudo-inertias Hc_j that M is formed from are 1.001 x too "
           "large (M only; h and g use their own sums)"),
     Fault("h-coriolis", VELOCITY_PRODUCTS, FAST,
@@ -131,8 +131,8 @@ CATALOGUE = (
           "a revolute joint turns its link by 1.001 q (Rodrigues' rotation; the twist S "
           "is left as it was)"),
     Fault("prismatic-stroke", PRISMATIC_KINEMATICS, FAST,
-          "motion[i, 3] = g[i, 3] * q[k]",
-          "motion[i, 3] = 1.001 * g[i, 3] * q[k]", 1e-3,
+          "motion[i, 3] = generators[k, i, 3] * q[k]",
+          "motion[i, 3] = 1.001 * generators[k, i, 3] * q[k]", 1e-3,
           "a prismatic joint moves its link by 1.001 q"),
     Fault("point-drift-coriolis", POINT_DRIFT, FAST,
           "acc += (2.0 * v_prev[a, c] + s_all[l, a, c] * w) * col[c]",

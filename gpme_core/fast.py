@@ -70,41 +70,6 @@ def _interrupt_in_chain(exc, depth=32):
 
 
 @_jit
-def _mm4(a, b, out):
-    """out = a @ b for 4x4 arrays, no allocation."""
-    for i in range(4):
-        for j in range(4):
-            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
-
-
-@_jit
-def _mm4_acc(a, b, scale, out):
-    """out += scale * (a @ b) for 4x4 arrays."""
-    for i in range(4):
-        for j in range(4):
-            out[i, j] += scale * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
-                                  + a[i, 3] * b[3, j])
-
-
-@_jit
-def _mm3(a, b, out):
-    """out[:3] = (a @ b)[:3] for 4x4 arrays whose last row of ``a`` is zero (twist and
-    velocity-product matrices); out[3] is left as it is (zero in every use here)."""
-    for i in range(3):
-        for j in range(4):
-            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j] + a[i, 3] * b[3, j]
-
-
-@_jit
-def _mm3_acc(a, b, scale, out):
-    """out[:3] += scale * (a @ b)[:3] for 4x4 arrays, ``a`` with a zero last row."""
-    for i in range(3):
-        for j in range(4):
-            out[i, j] += scale * (a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
-                                  + a[i, 3] * b[3, j])
-
-
-@_jit
 def chain(origins, generators, is_revolute, parents, q):
     """(T, S): world transforms T^(l) and world twist matrices S_l = T^(l) Q_l T^(l)^-1."""
     n = q.shape[0]
@@ -116,47 +81,72 @@ def chain(origins, generators, is_revolute, parents, q):
 
 @_jit
 def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scratch):
-    """:func:`chain` into t_all, s_all (n, 4, 4); scratch (2, 4, 4) work space."""
+    """:func:`chain` into t_all, s_all (n, 4, 4); scratch (2, 4, 4) work space.
+
+    Every transform is homogeneous (last row 0, 0, 0, 1): only the rotation (3 x 3) and
+    the translation are multiplied, in the order of a full 4 x 4 product (the terms left
+    out are exact zeros, so the results are those of the full products).  Arrays are
+    indexed in full rather than through per-link views (a view costs a reference count)."""
     n = q.shape[0]
     motion = scratch[0]
     local = scratch[1]
     for k in range(n):
-        g = generators[k]
-        for i in range(4):
+        for i in range(3):
             for j in range(4):
                 motion[i, j] = 1.0 if i == j else 0.0
                 s_all[k, i, j] = 0.0
+        for j in range(4):
+            s_all[k, 3, j] = 0.0
         if is_revolute[k]:
             # Rodrigues: R = I + sin K + (1 - cos) K^2, K = skew(axis)
             s, c = np.sin(q[k]), np.cos(q[k])
             for i in range(3):
                 for j in range(3):
-                    kk = g[i, 0] * g[0, j] + g[i, 1] * g[1, j] + g[i, 2] * g[2, j]
-                    motion[i, j] += s * g[i, j] + (1.0 - c) * kk
+                    kk = generators[k, i, 0] * generators[k, 0, j] \
+                        + generators[k, i, 1] * generators[k, 1, j] \
+                        + generators[k, i, 2] * generators[k, 2, j]
+                    motion[i, j] += s * generators[k, i, j] + (1.0 - c) * kk
         else:
             for i in range(3):
-                motion[i, 3] = g[i, 3] * q[k]
-        _mm4(origins[k], motion, local)
-        if parents[k] < 0:
-            t_all[k, :, :] = local
+                motion[i, 3] = generators[k, i, 3] * q[k]
+        # local = origin @ motion
+        for i in range(3):
+            for j in range(3):
+                local[i, j] = origins[k, i, 0] * motion[0, j] + origins[k, i, 1] * motion[1, j] \
+                    + origins[k, i, 2] * motion[2, j]
+            local[i, 3] = origins[k, i, 0] * motion[0, 3] + origins[k, i, 1] * motion[1, 3] \
+                + origins[k, i, 2] * motion[2, 3] + origins[k, i, 3]
+        p = parents[k]
+        if p < 0:
+            for i in range(3):
+                for j in range(4):
+                    t_all[k, i, j] = local[i, j]
         else:
-            _mm4(t_all[parents[k]], local, t_all[k])
-        acc = t_all[k]
+            for i in range(3):
+                for j in range(3):
+                    t_all[k, i, j] = t_all[p, i, 0] * local[0, j] + t_all[p, i, 1] * local[1, j] \
+                        + t_all[p, i, 2] * local[2, j]
+                t_all[k, i, 3] = t_all[p, i, 0] * local[0, 3] + t_all[p, i, 1] * local[1, 3] \
+                    + t_all[p, i, 2] * local[2, 3] + t_all[p, i, 3]
+        t_all[k, 3, 0], t_all[k, 3, 1], t_all[k, 3, 2], t_all[k, 3, 3] = 0.0, 0.0, 0.0, 1.0
         if is_revolute[k]:
             # S = [[W, -W p], [0, 0]],  W = R K R^T = skew(R k): the axis k = (K[2, 1],
             # K[0, 2], K[1, 0]) turned into the world frame
-            wx = acc[0, 0] * g[2, 1] + acc[0, 1] * g[0, 2] + acc[0, 2] * g[1, 0]
-            wy = acc[1, 0] * g[2, 1] + acc[1, 1] * g[0, 2] + acc[1, 2] * g[1, 0]
-            wz = acc[2, 0] * g[2, 1] + acc[2, 1] * g[0, 2] + acc[2, 2] * g[1, 0]
+            ax, ay, az = generators[k, 2, 1], generators[k, 0, 2], generators[k, 1, 0]
+            wx = t_all[k, 0, 0] * ax + t_all[k, 0, 1] * ay + t_all[k, 0, 2] * az
+            wy = t_all[k, 1, 0] * ax + t_all[k, 1, 1] * ay + t_all[k, 1, 2] * az
+            wz = t_all[k, 2, 0] * ax + t_all[k, 2, 1] * ay + t_all[k, 2, 2] * az
             s_all[k, 0, 1], s_all[k, 0, 2] = -wz, wy
             s_all[k, 1, 0], s_all[k, 1, 2] = wz, -wx
             s_all[k, 2, 0], s_all[k, 2, 1] = -wy, wx
             for i in range(3):
-                s_all[k, i, 3] = -(s_all[k, i, 0] * acc[0, 3] + s_all[k, i, 1] * acc[1, 3]
-                                   + s_all[k, i, 2] * acc[2, 3])
+                s_all[k, i, 3] = -(s_all[k, i, 0] * t_all[k, 0, 3]
+                                   + s_all[k, i, 1] * t_all[k, 1, 3]
+                                   + s_all[k, i, 2] * t_all[k, 2, 3])
         else:
             for i in range(3):
-                s_all[k, i, 3] = acc[i, 0] * g[0, 3] + acc[i, 1] * g[1, 3] + acc[i, 2] * g[2, 3]
+                s_all[k, i, 3] = t_all[k, i, 0] * generators[k, 0, 3] \
+                    + t_all[k, i, 1] * generators[k, 1, 3] + t_all[k, i, 2] * generators[k, 2, 3]
 
 
 @_jit
@@ -174,47 +164,82 @@ def terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot):
 @_jit
 def terms_scratch_size(n):
     """Length of the float scratch of :func:`terms_into` for n coordinates."""
-    return 5 * 16 * n + 4 * n + 12 * n + n + 3 * 16
+    return 5 * 16 * n + 4 * n + 6 * n + n + 3 * 16
+
+
+@_jit
+def is_serial(parents):
+    """True when the joints form one serial chain (parents[k] = k - 1 for every k)."""
+    for k in range(parents.shape[0]):
+        if parents[k] != k - 1:
+            return False
+    return True
 
 
 @_jit
 def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h, g,
-               scratch):
+               scratch, serial=-1):
     """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),).
 
-    Per link l: hw_l = T H T^T (world pseudo-inertia); per joint, over its subtree
-    (gpme_core.dynamics): hc (composite pseudo-inertia), gc (sum of B_l hw_l), wc (first
-    moments: the last columns of T H), accumulated from the leaves to the root."""
+    Per link l: hw_l = T H T^T (world pseudo-inertia); per joint j, over the links it moves
+    (gpme_core.dynamics): Hc_j (composite pseudo-inertia), Gc_j (sum of B_l hw_l), wc_j
+    (first moments: the last columns of T H), accumulated from the leaves to the root.  A
+    serial chain (``serial`` 1, or -1 and :func:`is_serial`) keeps one running sum from the
+    tip (index 0 of hc, gc, wc); a tree (``serial`` 0) keeps each joint's sum and adds it
+    to its parent's.  Arrays are indexed in full rather than through per-link views (a
+    view costs a reference count)."""
     n = q_dot.shape[0]
+    if serial < 0:
+        serial = 1 if is_serial(parents) else 0
     hw = scratch[:16 * n].reshape((n, 4, 4))
-    hc = scratch[16 * n:32 * n].reshape((n, 4, 4))
-    gc = scratch[32 * n:48 * n].reshape((n, 4, 4))
-    b_all = scratch[48 * n:64 * n].reshape((n, 4, 4))
-    v_all = scratch[64 * n:80 * n].reshape((n, 4, 4))
-    wc = scratch[80 * n:84 * n].reshape((n, 4))
-    s_rows = scratch[84 * n:96 * n].reshape((12, n))
-    column = scratch[96 * n:97 * n]
-    small = scratch[97 * n:97 * n + 3 * 16].reshape((3, 4, 4))
-    th, tmp, y = small[0], small[1], small[2]
+    b_all = scratch[16 * n:32 * n].reshape((n, 4, 4))
+    v_all = scratch[32 * n:48 * n].reshape((n, 4, 4))
+    hc = scratch[48 * n:64 * n].reshape((n, 4, 4))
+    gc = scratch[64 * n:80 * n].reshape((n, 4, 4))
+    wl = scratch[80 * n:84 * n].reshape((n, 4))
+    s6 = scratch[84 * n:90 * n].reshape((6, n))
+    column = scratch[90 * n:91 * n]
+    small = scratch[91 * n:91 * n + 3 * 16].reshape((3, 4, 4))
+    th, tmp = small[0], small[1]
+    wc = small[2] if serial else wl           # a chain's running wc: its row 0
     for l in range(n):
-        _mm4(t_all[l], pseudo_inertias[l], th)
-        tl = t_all[l]
-        # T H T^T is symmetric: the upper triangle, mirrored
-        for i in range(4):
-            for j in range(i, 4):
-                v = th[i, 0] * tl[j, 0] + th[i, 1] * tl[j, 1] + th[i, 2] * tl[j, 2] \
-                    + th[i, 3] * tl[j, 3]
+        # T H (its last row is H's: T's last row is (0, 0, 0, 1))
+        for i in range(3):
+            for j in range(4):
+                th[i, j] = t_all[l, i, 0] * pseudo_inertias[l, 0, j] \
+                    + t_all[l, i, 1] * pseudo_inertias[l, 1, j] \
+                    + t_all[l, i, 2] * pseudo_inertias[l, 2, j] \
+                    + t_all[l, i, 3] * pseudo_inertias[l, 3, j]
+        # T H T^T is symmetric: the upper triangle, mirrored; its last column is T H's
+        for i in range(3):
+            for j in range(i, 3):
+                v = th[i, 0] * t_all[l, j, 0] + th[i, 1] * t_all[l, j, 1] \
+                    + th[i, 2] * t_all[l, j, 2] + th[i, 3] * t_all[l, j, 3]
                 hw[l, i, j] = v
                 hw[l, j, i] = v
-            wc[l, i] = th[i, 3]
-            for j in range(4):
-                # the subtree sums start with the link's own part: its children add theirs
-                # below before the joint reads them (a child's index is above its parent's)
-                hc[l, i, j] = hw[l, i, j]
-                gc[l, i, j] = 0.0
+            hw[l, i, 3] = th[i, 3]
+            hw[l, 3, i] = th[i, 3]
+            wl[l, i] = th[i, 3]
+        hw[l, 3, 3] = pseudo_inertias[l, 3, 3]
+        wl[l, 3] = pseudo_inertias[l, 3, 3]
+    if serial:
+        for a in range(4):
+            wc[0, a] = 0.0
+            for c in range(4):
+                hc[0, a, c] = 0.0
+                gc[0, a, c] = 0.0
+    else:
+        # the subtree sums start with the link's own part: its children add theirs
+        # below before the joint reads them (a child's index is above its parent's)
+        for l in range(n):
+            for i in range(4):
+                for j in range(4):
+                    hc[l, i, j] = hw[l, i, j]
+                    gc[l, i, j] = 0.0
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
     # B_l = B_p(l) + (2 V_p(l) + S_l qd_l) S_l qd_l,  V_l = V_p(l) + S_l qd_l.  S, V and B
-    # have a zero last row: only the first three are formed (what _mm3_acc reads)
+    # have a zero last row: only the first three are formed, and S's zero last row drops
+    # the fourth term of each product
     for l in range(n):
         w = q_dot[l]
         p = parents[l]
@@ -232,50 +257,84 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                     tmp[i, j] = 2.0 * v_all[p, i, j] + sw
                     b_all[l, i, j] = b_all[p, i, j]
                     v_all[l, i, j] = v_all[p, i, j] + sw
-        _mm3_acc(tmp, s_all[l], w, b_all[l])
-    # S has a zero last row: the traces run over its first three rows only.  s_rows[e, i]
-    # is entry e = 4 a + c (a < 3) of S_i, so that each m_ij below is a sum over e of
-    # contiguous, vectorisable products (summed in the same order as tr(S_i Y^T)).
+        for i in range(3):
+            for j in range(4):
+                b_all[l, i, j] += w * (tmp[i, 0] * s_all[l, 0, j] + tmp[i, 1] * s_all[l, 1, j]
+                                       + tmp[i, 2] * s_all[l, 2, j])
+    # S_i = [[W_i, v_i], [0, 0]] with W_i skew: tr(S_i Y^T) = sum over a < c < 3 of
+    # S_i[a, c] (Y[a, c] - Y[c, a]) + sum_a S_i[a, 3] Y[a, 3].  s6[e, i] holds S_i's six
+    # independent entries (01, 02, 12, 03, 13, 23), so that each row of M below is a sum
+    # of six contiguous, vectorisable products
     for i in range(n):
-        for a in range(3):
-            for c in range(4):
-                s_rows[4 * a + c, i] = s_all[i, a, c]
+        s6[0, i], s6[1, i], s6[2, i] = s_all[i, 0, 1], s_all[i, 0, 2], s_all[i, 1, 2]
+        s6[3, i], s6[4, i], s6[5, i] = s_all[i, 0, 3], s_all[i, 1, 3], s_all[i, 2, 3]
     for j in range(n - 1, -1, -1):
-        hcj = hc[j]
-        _mm3_acc(b_all[j], hw[j], 1.0, gc[j])
-        _mm3(s_all[j], hcj, y)
-        for i in range(j + 1):
-            column[i] = 0.0
+        c_j = 0 if serial else j                  # where joint j's sums are
+        if serial:
+            for a in range(4):
+                for c in range(4):
+                    hc[0, a, c] += hw[j, a, c]
+                wc[0, a] += wl[j, a]
+        # Gc_j += B_j hw_j (B_j: three rows)
         for a in range(3):
             for c in range(4):
-                yac = y[a, c]
-                row = s_rows[4 * a + c]
-                for i in range(j + 1):
-                    column[i] += row[i] * yac
-        # m_ij = tr(S_i Hc_j S_j^T) where joint i moves link j, else 0 (other branches)
-        for i in range(j + 1):
-            v = column[i] if moves[i, j] else 0.0
-            m[i, j] = v
-            m[j, i] = v
+                gc[c_j, a, c] += b_all[j, a, 0] * hw[j, 0, c] + b_all[j, a, 1] * hw[j, 1, c] \
+                    + b_all[j, a, 2] * hw[j, 2, c] + b_all[j, a, 3] * hw[j, 3, c]
+        _mass_row(j, s_all, hc, c_j, s6, serial, moves, column, m)
         acc = 0.0
         for a in range(3):
             for c in range(4):
-                acc += s_all[j, a, c] * gc[j, a, c]
+                acc += s_all[j, a, c] * gc[c_j, a, c]
         h[j] = -acc
         gj = 0.0
         for a in range(3):
             sw = 0.0
             for c in range(4):
-                sw += s_all[j, a, c] * wc[j, c]
+                sw += s_all[j, a, c] * wc[c_j, c]
             gj += gamma[a] * sw
         g[j] = -gj
         p = parents[j]
-        if p >= 0:
+        if not serial and p >= 0:
             for a in range(4):
                 for c in range(4):
-                    hc[p, a, c] += hcj[a, c]
+                    hc[p, a, c] += hc[j, a, c]
                     gc[p, a, c] += gc[j, a, c]
                 wc[p, a] += wc[j, a]
+
+
+@_jit
+def _mass_row(j, s_all, hc, c_j, s6, serial, moves, column, m):
+    """Row and column j of M up to the diagonal: m_ij = m_ji = tr(S_i Hc_j S_j^T) for
+    i <= j (zero where joint i does not move link j: other branches of a tree); Hc_j is
+    hc[c_j].
+
+    Y = S_j Hc_j is formed on the nine entries the skew trace reads (S_j's zero diagonal
+    and last row drop their terms), folded to the six that pair with s6 (terms_into)."""
+    s01, s02, s03 = s_all[j, 0, 1], s_all[j, 0, 2], s_all[j, 0, 3]
+    s10, s12, s13 = s_all[j, 1, 0], s_all[j, 1, 2], s_all[j, 1, 3]
+    s20, s21, s23 = s_all[j, 2, 0], s_all[j, 2, 1], s_all[j, 2, 3]
+    y01 = s01 * hc[c_j, 1, 1] + s02 * hc[c_j, 2, 1] + s03 * hc[c_j, 3, 1]
+    y10 = s10 * hc[c_j, 0, 0] + s12 * hc[c_j, 2, 0] + s13 * hc[c_j, 3, 0]
+    y02 = s01 * hc[c_j, 1, 2] + s02 * hc[c_j, 2, 2] + s03 * hc[c_j, 3, 2]
+    y20 = s20 * hc[c_j, 0, 0] + s21 * hc[c_j, 1, 0] + s23 * hc[c_j, 3, 0]
+    y12 = s10 * hc[c_j, 0, 2] + s12 * hc[c_j, 2, 2] + s13 * hc[c_j, 3, 2]
+    y21 = s20 * hc[c_j, 0, 1] + s21 * hc[c_j, 1, 1] + s23 * hc[c_j, 3, 1]
+    e0, e1, e2 = y01 - y10, y02 - y20, y12 - y21
+    e3 = s01 * hc[c_j, 1, 3] + s02 * hc[c_j, 2, 3] + s03 * hc[c_j, 3, 3]
+    e4 = s10 * hc[c_j, 0, 3] + s12 * hc[c_j, 2, 3] + s13 * hc[c_j, 3, 3]
+    e5 = s20 * hc[c_j, 0, 3] + s21 * hc[c_j, 1, 3] + s23 * hc[c_j, 3, 3]
+    for i in range(j + 1):
+        column[i] = (s6[0, i] * e0 + s6[1, i] * e1 + s6[2, i] * e2 + s6[3, i] * e3
+                     + s6[4, i] * e4 + s6[5, i] * e5)
+    if serial:
+        for i in range(j + 1):
+            m[j, i] = column[i]
+            m[i, j] = column[i]
+    else:
+        for i in range(j + 1):
+            v = column[i] if moves[i, j] else 0.0
+            m[j, i] = v
+            m[i, j] = v
 
 
 @_jit

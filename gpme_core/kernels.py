@@ -349,16 +349,19 @@ def rows_scratch_size(n, n_points):
     return 9 * n_points + 3 * n * n_points + N_PAIR_TERMS + 3 + POINT_SCRATCH
 
 
-# above this size the reduced matrix is factorised by LAPACK (blocked, faster); below
-# it by the loops here, which cost less than LAPACK's call overhead (measured: equal at
-# about 20, LAPACK 2.3x faster at 150)
+# from this size on the reduced matrix is factorised by LAPACK (blocked, faster); below
+# it by the loops here, which cost less than LAPACK's call and copy.  Measured with
+# benchmarks.kernel_profile --cholesky: equal at about 24 rows, LAPACK 1.3x faster at 32
+# and 2.6x at 152; OpenBLAS's factor steps up at 34 rows, where the loops are up to 1.3x
+# faster again until about 48 (no single threshold wins at every size; 24 is kept)
 LAPACK_FROM = 24
 
 
 @_jit
 def _cholesky_solve(mat, b, low, x):
-    """x (r,) = mat^-1 b for symmetric positive definite mat (r, r); low (r, r) scratch for
-    the factor (LAPACK's own above LAPACK_FROM); False when mat is not positive definite."""
+    """x (r,) = mat^-1 b for symmetric positive definite mat (r, r), of which only the lower
+    triangle is read (both factors, LAPACK's too, read no other); low (r, r) scratch for
+    the factor (LAPACK's own from LAPACK_FROM on); False when mat is not positive definite."""
     r = b.shape[0]
     if r >= LAPACK_FROM:
         for j in range(r):
@@ -375,39 +378,36 @@ def _cholesky_solve(mat, b, low, x):
         return False
     for i in range(r):                       # L w = b
         s = b[i]
-        row = low[i]
         for p in range(i):
-            s -= row[p] * x[p]
-        x[i] = s / row[i]
+            s -= low[i, p] * x[p]
+        x[i] = s / low[i, i]
     for i in range(r - 1, -1, -1):           # L^T x = w, by rows of L (axpy form)
         x[i] /= low[i, i]
         xi = x[i]
-        row = low[i]
         for p in range(i):
-            x[p] -= row[p] * xi
+            x[p] -= low[i, p] * xi
     return True
 
 
 @_jit
 def _cholesky_factor(mat, low):
     """Lower Cholesky factor of mat (r, r) into low (its upper part is not used); False when
-    mat is not positive definite."""
+    mat is not positive definite.  Only mat's lower triangle is read.  (Rows are indexed
+    in full, not through views: a view costs a reference count, r^2 / 2 of them here.)"""
     r = mat.shape[0]
     for j in range(r):
         d = mat[j, j]
-        row_j = low[j]
         for p in range(j):
-            d -= row_j[p] * row_j[p]
+            d -= low[j, p] * low[j, p]
         if not d > 0.0:
             return False
         d = math.sqrt(d)
-        row_j[j] = d
+        low[j, j] = d
         for i in range(j + 1, r):
-            row_i = low[i]
             s = mat[i, j]
             for p in range(j):
-                s -= row_i[p] * row_j[p]
-            row_i[j] = s / d
+                s -= low[i, p] * low[j, p]
+            low[i, j] = s / d
     return True
 
 
@@ -472,7 +472,7 @@ def partition_rcond(a, dc, inv):
 def reduced_scratch_size(n, k):
     """Length of the float scratch of :func:`reduced_solve` for n coordinates, k constraints."""
     ni = n - k
-    return 3 * k * k + k * ni + k + n + n * ni + 2 * ni * ni + 2 * ni
+    return 3 * k * k + 2 * k * ni + k + n + 2 * ni * ni + 2 * ni
 
 
 @_jit
@@ -493,8 +493,8 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
     used += k
     r = ws[used:used + n]                    # h + Q - M p
     used += n
-    x = ws[used:used + n * ni].reshape((n, ni))            # M N
-    used += n * ni
+    x = ws[used:used + k * ni].reshape((k, ni))            # (M N)_d
+    used += k * ni
     red = ws[used:used + ni * ni].reshape((ni, ni))        # N^T M N
     used += ni * ni
     low = ws[used:used + ni * ni].reshape((ni, ni))        # its Cholesky factor
@@ -529,26 +529,32 @@ def reduced_solve(m_mat, rhs, a, c, ic, dc, switch_below, singular_rcond, q_ddot
         for p in range(k):
             s += m_mat[i, dc[p]] * p_dc[p]
         r[i] -= s
-    # the loops below run along contiguous rows (axpy form) so that they vectorise
-    for i in range(n):
-        xi = x[i]
-        mi = m_mat[i]
+    # N^T M N = M_ii + M_id Gamma + Gamma^T (M N)_d, formed on its lower triangle only (the
+    # Cholesky factor reads no other): (M N)_d = x, the k rows of M N of the dependent
+    # coordinates, first; then each row i of the reduced matrix up to its diagonal.  The
+    # inner loops run along contiguous rows (axpy form) so that they vectorise; rows are
+    # indexed in full, not through views (a view costs a reference count).
+    for p in range(k):
+        dp = dc[p]
         for j in range(ni):
-            xi[j] = mi[ic[j]]
-        for p in range(k):
-            f = mi[dc[p]]
-            gp = gam[p]
+            x[p, j] = m_mat[dp, ic[j]]
+        for q in range(k):
+            f = m_mat[dp, dc[q]]
             for j in range(ni):
-                xi[j] += f * gp[j]
+                x[p, j] += f * gam[q, j]
     for i in range(ni):
-        ri = red[i]
-        ri[:] = x[ic[i]]
-        s = r[ic[i]]
+        ii = ic[i]
+        for j in range(i + 1):
+            red[i, j] = m_mat[ii, ic[j]]
+        s = r[ii]
+        for p in range(k):
+            f = m_mat[ii, dc[p]]
+            for j in range(i + 1):
+                red[i, j] += f * gam[p, j]
         for p in range(k):
             f = gam[p, i]
-            xp = x[dc[p]]
-            for j in range(ni):
-                ri[j] += f * xp[j]
+            for j in range(i + 1):
+                red[i, j] += f * x[p, j]
             s += f * r[dc[p]]
         b[i] = s
     if not _cholesky_solve(red, b, low, z):
