@@ -47,17 +47,23 @@ from crosscheck.mujoco.mjcf import mjcf_text
 from crosscheck.mujoco.sim import chain_map, set_state
 from crosscheck.pinocchio.model import from_gpme
 from gpme_core.blas_threads import single_threaded_blas
+from gpme_core.errors import GpmeError
 from gpme_core.gpme import ProgrammedMotion
 from gpme_core.integrate import simulate
+from gpme_core.stability import suggest_rk4_step
 from gpme_examples.crane import CraneParameters, crane_system, initial_state
 from gpme_io.modelfile import load_model_files
 
-RK4_DT = {0: 1e-4, 5: 2e-5, 20: 5e-6, 50: 2e-6}     # s, inside RK4's stability limit
 RADAU_DT = 1e-3                                       # s, RadauIIA's step (docs/benchmarks.md)
 COMPARED_STEPS = 2000        # the states are compared after this many steps
 TIMED_S = 0.3                # s, each loop's timed runs take about this long per repeat
 MAX_SIMULATED_S = 0.25       # s, no timed run goes further (the free crane's arm leaves its
                              # joint range after ~0.5 s from the seeded start)
+MAX_DT = 1e-4                # s: the rigid crane's only spring (the support) would allow
+                             # 0.095 s, far above what MuJoCo's soft constraints follow
+DIVERGED = 1e3               # rad or m: a run whose final |q| reaches this has diverged
+MIN_STEPS = 500              # the longer timed run has at least this many steps (within
+                             # MAX_SIMULATED_S: RadauIIA's 1 ms steps, 250)
 START_SPEED = 0.3            # rad/s or m/s, largest entry of the seeded start velocity
 
 
@@ -143,6 +149,12 @@ def start_velocity(n, seed=20261126):
     return np.random.default_rng(seed).uniform(-START_SPEED, START_SPEED, n)
 
 
+def rk4_dt(system, q):
+    """s, the RK4 step of every engine: gpme's suggested step at q (half the stability limit
+    of the stiffest spring mode, gpme_core.stability.suggest_rk4_step), at most MAX_DT."""
+    return min(float(suggest_rk4_step(system.model, q)), MAX_DT)
+
+
 def _cases(n_values, ur5):
     """(name, system, q0, qd0, rk4 dt, free) of every case."""
     params = CraneParameters(drive_torque=0.0)
@@ -152,14 +164,15 @@ def _cases(n_values, ur5):
         q0, _ = initial_state(programmed.model, params)
         qd0 = start_velocity(len(q0))
         free = ProgrammedMotion(programmed.model, [])
-        out.append((f"crane n_rfe={n} free", free, q0, qd0, RK4_DT[n], True))
+        dt = rk4_dt(free, q0)
+        out.append((f"crane n_rfe={n} free", free, q0, qd0, dt, True))
         qc, qdc = programmed.consistent_state(0.0, q0, qd0)
-        out.append((f"crane n_rfe={n} programmed", programmed, qc, qdc, RK4_DT[n], False))
+        out.append((f"crane n_rfe={n} programmed", programmed, qc, qdc, dt, False))
     if ur5:
         (scenario,) = load_model_files(["models/ur5_flexible_forearm.toml"])
         free = ProgrammedMotion(scenario.model, [])
         out.append(("ur5 flexible forearm free", free, scenario.q0,
-                    start_velocity(len(scenario.q0)), scenario.dt, True))
+                    start_velocity(len(scenario.q0)), rk4_dt(free, scenario.q0), True))
     return out
 
 
@@ -188,16 +201,28 @@ def measure(name, system, q0, qd0, dt, free, repeats):
             print(f"  {name}: MuJoCo {label} not run: {type(exc).__name__}: {exc}")
     loops[("pinocchio", f"RK4 dt={dt:g} (Python loop)")] = lambda s: pinocchio_final(
         system, q0, qd0, dt, s, free)
-    finals = {}
-    for key, f in loops.items():                  # compile, load, first calls
-        f(10)
+    finals, counts = {}, {}
+    for key, f in list(loops.items()):            # compile, load, first calls
+        try:
+            f(10)
+        except GpmeError as exc:     # e.g. RadauIIA's 1 ms step on a violent start
+            print(f"  {name}: {key[0]} {key[1]} not timed: {exc}")
+            del loops[key]
+            continue
         if "RadauIIA" not in key[1]:
-            finals[key] = f(COMPARED_STEPS)[0]
+            finals[key], wall = f(COMPARED_STEPS)
+            per_step = wall / COMPARED_STEPS
+        else:
+            per_step = f(100)[1] / 100
+        step = RADAU_DT if "RadauIIA" in key[1] else dt
+        # N2: as many steps as take TIMED_S / 2 of wall time but at least MIN_STEPS, and
+        # never beyond MAX_SIMULATED_S
+        counts[key] = min(int(round(MAX_SIMULATED_S / step)),
+                          max(MIN_STEPS, int(TIMED_S / 2 / max(per_step, 1e-9))))
     best = {k: np.inf for k in loops}
     for _ in range(repeats):
         for key, f in loops.items():
-            step = RADAU_DT if "RadauIIA" in key[1] else dt
-            n2 = int(round(MAX_SIMULATED_S / step))
+            n2 = counts[key]
             n1 = n2 // 5
             w1, w2 = _best_wall(f, n1), _best_wall(f, n2)
             best[key] = min(best[key], (w2 - w1) / (n2 - n1) * 1e6)
@@ -205,6 +230,10 @@ def measure(name, system, q0, qd0, dt, free, repeats):
     rows = []
     for key in loops:
         diff = float(np.max(np.abs(finals[key] - ref))) if key in finals else float("nan")
+        if key in finals and not np.all(np.abs(finals[key]) < DIVERGED):
+            print(f"  {name}: {key[0]} {key[1]} diverged (|q| >= {DIVERGED:g}); its time is "
+                  "not a step's cost")
+            best[key], diff = float("nan"), float("nan")
         rows.append({"case": name, "coordinates": len(q0), "engine": key[0], "loop": key[1],
                      "us_per_step": best[key], "max_state_difference": diff})
     return rows
