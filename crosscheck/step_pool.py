@@ -23,6 +23,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
+from gpme_core.errors import OutputWriteError
 from gpme_io import dask_cluster
 from gpme_io.atomic import atomic_write_bytes
 
@@ -64,7 +65,8 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
     """Run the parts of ``steps`` as tasks on ``client``'s cluster; write each part's files
     into ``staging`` and replay its log records as it ends, finish a step (its page, rows
     and on_done(outcome)) when its parts are all back.  Returns the number of workers.  A
-    task that raises (OutputWriteError, a lost worker) raises here."""
+    task that raises OutputWriteError raises here; one that fails otherwise (a lost worker)
+    is a crashed part of its step (the step's crash row)."""
     staging = Path(staging)
     shared = str(staging.resolve() / SHARED_RUNS_DIR)
     order = submission_order(steps, previous_times)
@@ -88,12 +90,19 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
             future = client.submit(part_task, step, index, scenario, shared, quick,
                                    max_wall_s, key=f"gpme-verify-{step}-{index}-{token}",
                                    pure=False, priority=priority)
-            futures[future] = step
+            futures[future] = (step, index)
             priority -= 1
     done: Dict[str, List[PartOutcome]] = {step: [] for step in plan}
     try:
         for future in dask_cluster.as_completed(futures):
-            outcome, files, records = future.result()
+            try:
+                outcome, files, records = future.result()
+            except OutputWriteError:
+                raise
+            except Exception as exc:   # a lost worker (Dask's KilledWorker), a part that
+                # cannot travel back: that part crashed, the run goes on
+                step, index = futures[future]
+                outcome, files, records = verify_steps.crashed_part(step, index, exc), {}, []
             for relative, data in files.items():
                 atomic_write_bytes(staging / relative, data)
             name = plan[outcome.step][outcome.index].name

@@ -122,6 +122,11 @@ def _crash_of(exc) -> Crash:
                  isinstance(exc, GpmeError))
 
 
+def crashed_part(step, index, exc) -> PartOutcome:
+    """The outcome of a part that failed outside :func:`run_part` (its worker lost, say)."""
+    return PartOutcome(step, index, None, 0.0, _crash_of(exc))
+
+
 def run_part(step, index, out_dir, scenario, quick, progress=False,
              max_wall_s=None) -> PartOutcome:
     """``step`` on one ``scenario`` (the index-th of :func:`step_scenarios`), writing its

@@ -135,3 +135,36 @@ def test_default_scenarios_pickle_for_the_workers():
         scenarios = default_scenarios(step, True)
         again = cloudpickle.loads(cloudpickle.dumps(scenarios))
         assert [s.name for s in again] == [s.name for s in scenarios]
+
+
+class _LostFuture:
+    """A Dask future whose worker died: result() raises as KilledWorker does."""
+
+    def result(self):
+        raise RuntimeError("Attempted to run task gpme-verify-pinocchio-0 on 4 different "
+                           "workers, but all those workers died while running it")
+
+    def cancel(self):
+        pass
+
+
+class _LostClient:
+    """A client whose every task loses its worker."""
+
+    class scheduler:
+        address = "tcp://lost:0"
+
+    def submit(self, *args, **kwargs):
+        return _LostFuture()
+
+
+def test_a_part_whose_worker_is_lost_is_its_steps_crash_row(tmp_path, monkeypatch):
+    monkeypatch.setattr(step_pool.dask_cluster, "worker_count", lambda client: 1)
+    monkeypatch.setattr(step_pool.dask_cluster, "as_completed", lambda futures: list(futures))
+    outcomes = []
+    step_pool.run_on_cluster(_LostClient(), ["pinocchio"], tmp_path, None, True, None,
+                             outcomes.append)
+    (outcome,) = outcomes
+    assert outcome.crash is not None and "workers died" in outcome.crash.message
+    assert outcome.table["status"].tolist() == ["fail"]
+    assert (tmp_path / "checks").is_dir()          # the crash row is written like any row
