@@ -41,13 +41,16 @@ Record = Tuple[str, int, str]      # (logger name, level, message)
 
 
 def run_in_process(steps: Sequence[str], staging: Path, scenarios, quick, progress,
-                   max_wall_s, on_done: Callable[[StepOutcome], None]) -> None:
-    """Run ``steps`` here, one after another, into ``staging``; on_done(outcome) after each."""
-    with run_memo.shared_runs(Path(staging) / SHARED_RUNS_DIR):
+                   max_wall_s, on_done: Callable[[StepOutcome], None]) -> Dict[str, int]:
+    """Run ``steps`` here, one after another, into ``staging``; on_done(outcome) after each.
+    Returns {"computed": n, "shared": n}: the gpme runs the steps computed and those one
+    step found already computed by another (crosscheck.run_memo)."""
+    with run_memo.shared_runs(Path(staging) / SHARED_RUNS_DIR) as counts:
         for step in steps:
             log.info(f"[{step}] ...")
             on_done(verify_steps.run_step(step, staging, scenarios, quick, progress,
                                           max_wall_s))
+        return dict(counts)
 
 
 def submission_order(steps: Sequence[str], previous_times: Optional[Dict[str, float]]) -> List[str]:
@@ -61,10 +64,11 @@ def submission_order(steps: Sequence[str], previous_times: Optional[Dict[str, fl
 
 def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick, max_wall_s,
                    on_done: Callable[[StepOutcome], None],
-                   previous_times: Optional[Dict[str, float]] = None) -> int:
+                   previous_times: Optional[Dict[str, float]] = None) -> Tuple[int, Dict[str, int]]:
     """Run the parts of ``steps`` as tasks on ``client``'s cluster; write each part's files
     into ``staging`` and replay its log records as it ends, finish a step (its page, rows
-    and on_done(outcome)) when its parts are all back.  Returns the number of workers.  A
+    and on_done(outcome)) when its parts are all back.  Returns (the number of workers,
+    {"computed": n, "shared": n} gpme runs over all parts, as :func:`run_in_process`).  A
     task that raises OutputWriteError raises here; one that fails otherwise (a lost worker)
     is a crashed part of its step (the step's crash row)."""
     staging = Path(staging)
@@ -93,16 +97,20 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
             futures[future] = (step, index)
             priority -= 1
     done: Dict[str, List[PartOutcome]] = {step: [] for step in plan}
+    shared_runs = {"computed": 0, "shared": 0}
     try:
         for future in dask_cluster.as_completed(futures):
             try:
-                outcome, files, records = future.result()
+                outcome, files, records, counts = future.result()
             except OutputWriteError:
                 raise
             except Exception as exc:   # a lost worker (Dask's KilledWorker), a part that
                 # cannot travel back: that part crashed, the run goes on
                 step, index = futures[future]
                 outcome, files, records = verify_steps.crashed_part(step, index, exc), {}, []
+                counts = {}
+            for key in shared_runs:
+                shared_runs[key] += counts.get(key, 0)
             for relative, data in files.items():
                 atomic_write_bytes(staging / relative, data)
             name = plan[outcome.step][outcome.index].name
@@ -117,21 +125,22 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
     finally:
         for future in futures:
             future.cancel()
-    return workers
+    return workers, shared_runs
 
 
-def part_task(step, index, scenario, shared_dir, quick,
-              max_wall_s) -> Tuple[PartOutcome, Dict[str, bytes], List[Record]]:
+def part_task(step, index, scenario, shared_dir, quick, max_wall_s) -> tuple:
     """The task a worker runs: ``step`` on one scenario in a temporary directory (removed
     after), sharing gpme runs through ``shared_dir``; returns (outcome, {relative path:
-    bytes} of every file it wrote, its log records and warnings)."""
+    bytes} of every file it wrote, its log records and warnings, {"computed": n,
+    "shared": n} gpme runs)."""
     with tempfile.TemporaryDirectory(prefix=f"gpme-verify-{step}-") as tmp, \
-            _recorded() as records, run_memo.shared_runs(shared_dir):
+            _recorded() as records, run_memo.shared_runs(shared_dir) as counts:
         root = Path(tmp)
         outcome = verify_steps.run_part(step, index, root, scenario, quick, False, max_wall_s)
         files = {str(p.relative_to(root)): p.read_bytes()
                  for p in sorted(root.rglob("*")) if p.is_file()}
-    return outcome, files, records
+        counts = dict(counts)
+    return outcome, files, records, counts
 
 
 class _Collect(logging.Handler):

@@ -170,13 +170,18 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
     if scheduler or (workers > 1 and len(steps) > 1):
         previous_times = ((previous[0] or {}).get("run") or {}).get("step_times_s")
         with dask_cluster.client_for(scheduler, workers) as client:
-            n_workers = step_pool.run_on_cluster(client, steps, staging, scenarios, quick,
-                                                 max_wall_s, done, previous_times)
+            n_workers, shared = step_pool.run_on_cluster(client, steps, staging, scenarios,
+                                                         quick, max_wall_s, done,
+                                                         previous_times)
             execution = (f"{len(steps)} steps in parallel on {n_workers} Dask workers "
                          f"({scheduler or 'local cluster'})")
     else:
-        step_pool.run_in_process(steps, staging, scenarios, quick, progress, max_wall_s, done)
+        shared = step_pool.run_in_process(steps, staging, scenarios, quick, progress,
+                                          max_wall_s, done)
         execution = "steps one after another in one process"
+    execution += (f"; gpme runs the engines compare against: {shared['computed']} computed, "
+                  f"{shared['shared']} reused from another step")
+    log.info(f"[verify] {execution}")
     shutil.rmtree(staging / step_pool.SHARED_RUNS_DIR, ignore_errors=True)
     tables = {step: tables[step] for step in steps}          # the report's order, not the finish order
     timings = {step: timings[step] for step in steps}

@@ -112,12 +112,15 @@ def test_steps_on_a_cluster_equal_the_steps_in_process(cluster, tmp_path, caplog
     steps = ["gpme", "pinocchio"]
     here, there = tmp_path / "here", tmp_path / "there"
     outcomes = {"here": {}, "there": {}}
-    step_pool.run_in_process(steps, here, None, True, False, None,
-                             lambda o: outcomes["here"].__setitem__(o.step, o))
+    counted_here = step_pool.run_in_process(steps, here, None, True, False, None,
+                                            lambda o: outcomes["here"].__setitem__(o.step, o))
     with caplog.at_level(logging.INFO, logger="gpme"), Client(cluster.scheduler_address) as c:
-        workers = step_pool.run_on_cluster(c, steps, there, None, True, None,
-                                           lambda o: outcomes["there"].__setitem__(o.step, o))
+        workers, counted_there = step_pool.run_on_cluster(
+            c, steps, there, None, True, None,
+            lambda o: outcomes["there"].__setitem__(o.step, o))
     assert workers == 2
+    # Pinocchio's refined gpme runs (h, h/2, h/4 of its scenarios), counted on both sides
+    assert counted_here == counted_there and counted_here["computed"] >= 3
     for step in steps:
         a, b = outcomes["here"][step], outcomes["there"][step]
         assert a.crash is None and b.crash is None
