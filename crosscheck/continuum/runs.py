@@ -172,7 +172,7 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
                                                             euler_bernoulli)
     ti.adaptiveStep = False
     # sparse LU: a beam mesh gives a banded system; the dense default grows as N^3
-    settings.linearSolverType = exu.LinearSolverType.EigenSparse
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     ok, message, wall, _ = solve_implicit(mbs, settings)
     if not ok or len(records) != steps // every + 1:
         reached = max(records) * output_dt if records else 0.0
