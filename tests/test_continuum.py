@@ -4,6 +4,7 @@ Each check compares with something derived independently: closed-form beam stati
 mass conservation, gpme's rigid runs (the continuum's rigid machinery must converge to
 them as the step falls), the closed-form centrifugal stretch of a spinning rod.
 """
+import dataclasses
 import numpy as np
 import pytest
 
@@ -269,3 +270,39 @@ def test_model_validity_gate_passes_the_crane_and_catches_a_stiffness_fault(faul
     failed = [r["quantity"] for r in gated if r["status"] == "fail"]
     assert (failed == []) if fault == 1.0 else failed, [(r["quantity"], r["abs_error"],
                                                           r["tol_abs"]) for r in gated]
+
+
+def test_a_model_file_tolerance_replaces_the_validity_gate_with_its_reason():
+    """[[tolerance]] check = "continuum/<gated row>" replaces that row's physics gate by the
+    file's abs/rel and reason (the issue's 'or a tolerance the model file states with a
+    reason'); the crane with its sde bending springs 10 % too stiff fails the tip-deflection
+    gate (the test above) but passes a stated 1 m, and the row says whose tolerance it is
+    and what the physics gate would have been.  A check naming an information row or no
+    row is a ModelError before any run."""
+    import gpme_core.rfem as rfem
+    from crosscheck.continuum.validity import check_scenario
+    from gpme_core.errors import ModelError
+    from gpme_io.scenario import ToleranceOverride, crane_scenario
+    base = crane_scenario(3, on_constraints=True)
+    for bad in ("continuum/multipliers vs continuum", "continuum/tip bending"):
+        scenario = dataclasses.replace(base, tolerances={bad: ToleranceOverride(bad, 1.0, 0.0,
+                                                                                "x")})
+        with pytest.raises(ModelError, match="names no gated model-validity row"):
+            check_scenario(scenario, quick=True, log=lambda m: None, horizon=0.2)
+    check = "continuum/tip deflection vs continuum"
+    original = rfem.BeamProperties.sde_coefficients
+
+    def faulty(self, n):
+        (s_psi, s_theta, s_phi), damp = original(self, n)
+        return (s_psi * 1.1, s_theta * 1.1, s_phi), damp
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rfem.BeamProperties, "sde_coefficients", faulty)   # before the build
+        scenario = dataclasses.replace(crane_scenario(3, on_constraints=True), tolerances={
+            check: ToleranceOverride(check, 1.0, 0.0, "stated for the test: 1 m")})
+        validity = check_scenario(scenario, quick=True, log=lambda m: None, horizon=0.2)
+    row = next(r for r in validity.rows if r["quantity"] == "tip deflection vs continuum")
+    assert row["status"] == "pass" and row["tol_abs"] == 1.0
+    assert row["reason"].startswith("model file: stated for the test: 1 m (instead of "
+                                        "the physics gate"), row["reason"]
+    gate = float(row["reason"].split("physics gate ")[1].split(":")[0])
+    assert row["abs_error"] > gate          # the fault fails the physics gate it replaced

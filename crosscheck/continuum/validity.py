@@ -40,7 +40,7 @@ import dataclasses
 from dataclasses import dataclass
 import numpy as np
 
-from gpme_core.errors import GpmeError
+from gpme_core.errors import GpmeError, ModelError
 from gpme_io.modelfile import build_scenario, read_model_file
 from gpme_io.modelfile.schema import CraneSource
 from gpme_io.scenario import crane_scenario
@@ -79,6 +79,26 @@ GATED = ("defl", "rot", "joint")
 QUANTITY = {"defl": "tip deflection vs continuum", "rot": "tip rotation vs continuum",
             "joint": "rigid coordinates vs continuum", "lambda": "multipliers vs continuum",
             "axial": "axial tip displacement vs continuum (RFEM has no stretch)"}
+
+
+def stated_tolerances(scenario) -> dict:
+    """{gated group: ToleranceOverride} the scenario's model file states for
+    "continuum/<quantity>" ([[tolerance]], docs/models.md), quantity one of the gated rows'
+    (QUANTITY of GATED); ModelError naming the valid checks when one names another row (an
+    information row has no gate to replace)."""
+    groups = {QUANTITY[g]: g for g in GATED}
+    out = {}
+    for check, override in (getattr(scenario, "tolerances", None) or {}).items():
+        engine, _, quantity = check.partition("/")
+        if engine != ENGINE:
+            continue
+        if quantity not in groups:
+            raise ModelError(
+                f"{scenario.name}: [[tolerance]] check {check!r} names no gated model-validity "
+                f"row; the gated ones are {[f'{ENGINE}/{QUANTITY[g]}' for g in GATED]} (the "
+                "others are information rows)")
+        out[groups[quantity]] = override
+    return out
 
 
 def has_flexible_links(model) -> bool:
@@ -176,6 +196,7 @@ def check_scenario(scenario, quick: bool, log=print, rebuild=scenario_at,
     """The model-validity rows of one scenario (module docstring); horizon: s, instead of
     QUICK_T_END or VALIDITY_T_END."""
     model = scenario.model
+    stated = stated_tolerances(scenario)         # a bad [[tolerance]] fails before the runs
     layout = continuum_layout(model)
     horizon = min(horizon or (QUICK_T_END if quick else VALIDITY_T_END), scenario.t_end)
     dt, output_dt = first_step(layout, horizon)
@@ -219,11 +240,15 @@ def check_scenario(scenario, quick: bool, log=print, rebuild=scenario_at,
         e_ref = REFERENCE_ORDER_MARGIN * max(
             reference.mesh_change.get(c, 0.0) + reference.step_change.get(c, 0.0) for c in cols)
         predicted = RICHARDSON_ORDER2 * float(np.abs(x - x2).max()) if x.size else 0.0
-        if group in GATED:
-            tol = Tolerance(ORDER_MARGIN * predicted + e_ref, 0.0,
-                            f"RFEM's error at n predicted from n and 2n (order 2, x{ORDER_MARGIN:g} "
-                            f"for an observed order down to 0.8): {predicted:.3g}; the continuum's "
-                            f"mesh and step error, 3 x its last changes: {e_ref:.3g}")
+        physics = (f"RFEM's error at n predicted from n and 2n (order 2, x{ORDER_MARGIN:g} "
+                   f"for an observed order down to 0.8): {predicted:.3g}; the continuum's "
+                   f"mesh and step error, 3 x its last changes: {e_ref:.3g}")
+        if group in stated:
+            o = stated[group]
+            tol = Tolerance(o.abs, o.rel, f"model file: {o.reason} (instead of the physics "
+                            f"gate {ORDER_MARGIN * predicted + e_ref:.3g}: {physics})")
+        elif group in GATED:
+            tol = Tolerance(ORDER_MARGIN * predicted + e_ref, 0.0, physics)
         elif group == "axial":
             tol = Tolerance(np.inf, 0.0, "information: RFEM's rigid segments do not stretch; the "
                             "row compares with the inextensible continuum (RFEM n to 2n: "

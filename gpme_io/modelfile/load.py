@@ -45,7 +45,7 @@ ROBOT_DATA_DISTRIBUTION = "example-robot-data"
 ROBOT_DATA_ROOT = "cmeel.prefix/share/example-robot-data/robots/"
 ROBOTS_EXTRA_HINT = "install the optional extra: pip install -e '.[robots]'"
 # gpme: the run checks (crosscheck.run_checks) and the observed order of its own runs
-TOLERANCE_ENGINES = ("gpme", "pinocchio", "mujoco", "drake", "exudyn")
+TOLERANCE_ENGINES = ("gpme", "pinocchio", "mujoco", "drake", "exudyn", "continuum")
 # engines that integrate with their own scheme and step ([[engine_step]]); Pinocchio's and
 # MuJoCo's runs use gpme's RK4 step ([run] dt)
 STEP_ENGINES = ("drake", "exudyn")
