@@ -8,7 +8,10 @@ a seeded off-equilibrium state: the chain kinematics (T, S), the trace-form term
 g), the constraint rows (Phi, Phi_dot, A, kappa), the reduced solve (Gamma, N^T M N, its
 Cholesky factor, q_ddot, multipliers), the whole evaluation, and one step of the compiled
 RK4 loop (kernels.rk4_advance, four evaluations and the stage updates; a step of 1e-8 s so
-that the state stays where the parts were timed).  Microseconds per call, best of 5
+that the state stays where the parts were timed).  The last three columns are the free
+crane (no constraints, the same state): its whole evaluation with the O(n) recursive solve
+(gpme_core.fast.chain_solve, M not formed), the same with M formed and solved by the dense
+Cholesky (kernels.OPT_DENSE_FREE_SOLVE), and its RK4 step.  Microseconds per call, best of 5
 batches, LAPACK on one thread as in the compiled runs; the parts add up to the whole
 within the spring, damper and drive forces and the workspace carving.
 
@@ -23,6 +26,7 @@ import numba
 import numpy as np
 
 from gpme_core import blas_threads, compiled, fast, kernels
+from gpme_core.gpme import ProgrammedMotion
 from gpme_examples.crane import crane_system, initial_state
 
 BATCH = 400
@@ -112,6 +116,14 @@ def profile(n_rfe, t=0.37, seed=0):
     c = -kappa - 2 * system.alpha * phi_dot - system.beta ** 2 * phi
     out = np.empty(n), np.empty(k)
     y = np.concatenate([q, q_dot, np.zeros(kernels.N_WORK)])
+    free = ProgrammedMotion(system.model)
+    free_cs, why = compiled.for_system(free)
+    if free_cs is None:
+        raise SystemExit(f"free crane not compiled: {why}")
+    free_out = np.empty(n), np.empty(0), np.empty(kernels.INFO_SIZE)
+    dense_opts = np.zeros(kernels.OPT_DENSE_FREE_SOLVE + 1)
+    dense_opts[:kernels.OPT_DENSE_FREE_SOLVE] = free_cs.options()[:kernels.OPT_DENSE_FREE_SOLVE]
+    dense_opts[kernels.OPT_DENSE_FREE_SOLVE] = 1.0
     return {"n_rfe": n_rfe, "coordinates": n,
             "chain T, S": _us(_loop_chain, md, q),
             "terms M, h, g": _us(_loop_terms, md, t_all, s_all, q_dot),
@@ -121,7 +133,13 @@ def profile(n_rfe, t=0.37, seed=0):
             "whole evaluate": _us(_loop_evaluate, t, q, q_dot, md, cd, cs.options(),
                                   system.ic, system.dc, *out, np.empty(kernels.INFO_SIZE)),
             "RK4 step": _us(_loop_rk4, y, md, cd, cs.options(), system.ic, system.dc,
-                            np.empty_like(y))}
+                            np.empty_like(y)),
+            "free evaluate": _us(_loop_evaluate, t, q, q_dot, free_cs.md, free_cs.cd,
+                                 free_cs.options(), free.ic, free.dc, *free_out),
+            "free evaluate, dense M": _us(_loop_evaluate, t, q, q_dot, free_cs.md, free_cs.cd,
+                                          dense_opts, free.ic, free.dc, *free_out),
+            "free RK4 step": _us(_loop_rk4, y.copy(), free_cs.md, free_cs.cd,
+                                 free_cs.options(), free.ic, free.dc, np.empty_like(y))}
 
 
 def cholesky_table(sizes=CHOLESKY_SIZES, seed=0):

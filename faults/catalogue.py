@@ -8,12 +8,14 @@ cannot rot silently: tests/test_fault_catalogue.py checks every anchor against t
 sources.
 
 The faults sit on the path the runs take: the numba kernels (gpme_core/fast.py: chain
-kinematics, trace-form M, h, g, point kinematics, multipliers; gpme_core/kernels.py: the fused
-right-hand side with springs, dampers, drives, constraint rows, kappa, Baumgarte, the reduced
-solve and the RK4 loop) and the Python code whose numbers those kernels are given
-(gpme_core/rfem.py: section constants, sde springs and dampers, the rigid elements' mass).
-faults.run shows for each fault that it changes a compiled run (its probe), so none of them
-sits on the numpy reference path only.
+kinematics, trace-form M, h, g, point kinematics, multipliers, the free solve of a serial
+chain; gpme_core/kernels.py: the fused right-hand side with springs, dampers, drives,
+constraint rows, kappa, Baumgarte, the reduced solve and the RK4 loop) and the Python code
+whose numbers those kernels are given (gpme_core/rfem.py: section constants, sde springs and
+dampers, the rigid elements' mass).  faults.run shows for each fault that it changes a
+compiled run (its probe), so none of them sits on the numpy reference path only; except
+``chain-articulated-inertia``, on the free solve, which the probe's programmed runs do not
+take (verify's free runs and tests/test_chain_solve.py do).
 
 Sizes are relative (a factor 1.001 is 1e-3) unless the fault is an offset; every fault is
 at most 1e-3 of the term it changes: subtle, far above round-off (1e-16) and the engines'
@@ -62,6 +64,7 @@ TREE_BRANCHES = "tree: no inertial coupling between branches"
 PAIR_ROW = "two-frame constraint row (second frame's part)"
 POINT_SPRINGS = "point springs (elastic force)"
 REDUCED_SOLVE = "reduced solve N^T (h + Q - M p)"
+FREE_CHAIN_SOLVE = "free solve of a serial chain M^-1 (h + Q) (articulated-body recursion)"
 MULTIPLIERS = "multiplier recovery lambda = A_dc^-T F_dc"
 RK4_WEIGHTS = "RK4 stage weights"
 
@@ -70,8 +73,8 @@ REQUIRED_TERMS = (
     RFEM_BENDING_SPRING, RFEM_TORSION_SPRING, RFEM_BENDING_DAMPER, RFEM_TORSION_DAMPER,
     SECTION_CIRCLE, SECTION_TUBE, SECTION_RECTANGLE, RFEM_MASS_SPLIT, REVOLUTE_KINEMATICS,
     PRISMATIC_KINEMATICS, PHI, ROW, KAPPA_DRIFT, KAPPA_HESSIAN, KAPPA_GRAD_T, KAPPA_PHI_TT,
-    JOINT_PROGRAMME, BAUMGARTE_ALPHA, BAUMGARTE_BETA, REDUCED_SOLVE, MULTIPLIERS,
-    RK4_WEIGHTS)
+    JOINT_PROGRAMME, BAUMGARTE_ALPHA, BAUMGARTE_BETA, REDUCED_SOLVE, FREE_CHAIN_SOLVE,
+    MULTIPLIERS, RK4_WEIGHTS)
 
 # the largest relative size a fault of the catalogue may have
 MAX_SIZE = 1e-3
@@ -211,6 +214,14 @@ CATALOGUE = (
           "s += 1.001 * f * r[dc[p]]", 1e-3,
           "the dependent part Gamma^T r_dc of the reduced right-hand side N^T (h + Q - M p) "
           "is 1.001 x too large"),
+    # the free solve of a serial chain (gpme_core/fast.py chain_solve, issue 29): the runs of
+    # models without programmed constraints (verify's free runs, the benchmarks); the
+    # probe's runs (faults.probe) are all programmed and take the reduced solve instead
+    Fault("chain-articulated-inertia", FREE_CHAIN_SOLVE, FAST,
+          "articulated[a, c] -= (fa * joint_force[i, c]) * inv_d",
+          "articulated[a, c] -= 1.001 * (fa * joint_force[i, c]) * inv_d", 1e-3,
+          "the articulated-inertia update I^A - U U^T / D of the free chain solve removes "
+          "1.001 x the joint's projection: M^-1 (h + Q) of a slightly different M"),
     Fault("rk4-weight", RK4_WEIGHTS, KERNELS,
           "(k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])",
           "(k1[i] + 2.002 * k2[i] + 2.0 * k3[i] + k4[i])", 1e-3,

@@ -34,7 +34,13 @@ gpme_core.compiled.pack):
          for a world anchor, s_par = (stiffness N/m, free length m, damping N s/m, anchor
          (3,) m))
     opts = float array (alpha 1/s, beta 1/s, paper_eq7 0/1, switch_below, singular_rcond,
-           divergence_limit)
+           divergence_limit[, dense_free_solve 0/1]) (the last entry optional:
+           OPT_DENSE_FREE_SOLVE)
+
+Free solve (k == 0, :func:`free_solve_is_recursive`): a serial chain (gpme_core.fast.
+is_serial) is solved by the O(n) articulated-body recursion gpme_core.fast.chain_solve,
+without forming M; a tree, or any model with opts[OPT_DENSE_FREE_SOLVE] = 1, by the dense
+Cholesky of M.
 
 (few arrays rather than one per quantity: each argument of a compiled function costs its
 own typing and unboxing on every call from Python.)
@@ -49,8 +55,9 @@ import math
 
 import numpy as np
 
-from .fast import (POINT_SCRATCH, _jit, chain_into, multipliers_into, point_into, terms_into,
-                   terms_scratch_size)
+from .fast import (POINT_SCRATCH, _jit, chain_into, chain_solve, chain_solve_scratch_size,
+                   is_serial, multipliers_into, point_into, terms_into, terms_scratch_size,
+                   world_pseudo_inertias)
 
 # ---------------------------------------------------------------- status codes
 OK = 0
@@ -79,6 +86,11 @@ F_SINE = 2                  # (offset, amplitude, omega, phase)
 F_QUINTIC = 3               # (level, ramp_time)
 F_TABULATED = 4             # (k, times (k), coefficients (k - 1, 4) row-major, v_first, v_last)
 F_USER = 5                  # (user index)
+
+# opts index of the optional switch (tests, benchmarks.kernel_profile): 1 solves a free
+# serial chain by the dense Cholesky of M instead of gpme_core.fast.chain_solve;
+# gpme_core.compiled gives opts without it (the recursive solve)
+OPT_DENSE_FREE_SOLVE = 6
 
 INFO_SIZE = 5               # info: partition rcond, W rates (dissipated, drive, reaction), spare
 N_WORK = 3
@@ -625,7 +637,17 @@ def workspace_size(n, k, n_points):
     n_points distinct constrained points)."""
     return (32 * n + 32 + terms_scratch_size(n) + n * n + 3 * n + 3 + 5 * k + k * n
             + rows_scratch_size(n, n_points) + reduced_scratch_size(n, k)
-            + SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH)
+            + chain_solve_scratch_size(n) + SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH)
+
+
+@_jit
+def free_solve_is_recursive(k, parents, opts):
+    """True when :func:`evaluate` solves M q_ddot = rhs by gpme_core.fast.chain_solve (no M
+    formed): no constraints (k == 0), a serial chain, and opts[OPT_DENSE_FREE_SOLVE] absent
+    or 0; else M is formed and solved densely."""
+    if k != 0 or not is_serial(parents):
+        return False
+    return not (opts.shape[0] > OPT_DENSE_FREE_SOLVE and opts[OPT_DENSE_FREE_SOLVE] != 0.0)
 
 
 @_jit
@@ -658,7 +680,9 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     rhs = ws[used + 2 * n:used + 3 * n]
     tf = ws[used + 3 * n:used + 3 * n + 3]
     used += 3 * n + 3
-    terms_into(t_all, s_all, pseudo, gamma, parents, moves, q_dot, m_mat, h, g, terms_scratch)
+    recursive = free_solve_is_recursive(k, parents, opts)
+    terms_into(t_all, s_all, pseudo, gamma, parents, moves, q_dot, m_mat, h, g, terms_scratch,
+               -1, not recursive)
     w_diss, w_drive = 0.0, 0.0
     for i in range(n):
         d_i = damping[i] * q_dot[i]
@@ -692,6 +716,11 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     rows_scratch = ws[used:used + size]
     used += size
     reduced_scratch = ws[used:used + reduced_scratch_size(n, k)]
+    used += reduced_scratch_size(n, k)
+    if recursive:
+        ok = chain_solve(s_all, world_pseudo_inertias(terms_scratch, n), rhs, q_ddot,
+                         ws[used:used + chain_solve_scratch_size(n)])
+        return OK if ok else SINGULAR_REDUCED
     if k == 0:
         low = reduced_scratch[n:n + n * n].reshape((n, n))
         ok = _cholesky_solve(m_mat, rhs, low, q_ddot)

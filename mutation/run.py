@@ -66,7 +66,7 @@ SLOW = ["tests/test_integrators.py::test_scipy_methods_match_rk4",
 FIRST = {"kinematics": ["tests/test_kinematics.py"], "dynamics": ["tests/test_dynamics.py"],
          "rfem": ["tests/test_rfem.py", "tests/test_statics.py"], "inertia": [],
          "constraints": ["tests/test_gpme.py"], "gpme": ["tests/test_gpme.py"],
-         "integrate": ["tests/test_integrators.py"], "fast": ["tests/test_fast.py"],
+         "integrate": ["tests/test_integrators.py"], "fast": ["tests/test_fast.py", "tests/test_chain_solve.py"],
          # the compiled evaluation against the numpy reference (tests/test_compiled.py), the
          # compiled RK4 / Radau IIA loops against the Python loop and their order
          # (tests/test_compiled_runs.py), the compiled reduced solve (tests/test_fast.py);

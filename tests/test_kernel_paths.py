@@ -2,7 +2,8 @@
 the serial-chain path (one running composite sum from the tip) and the tree path (each
 joint's subtree sums added to its parent's), against each other and against the numpy
 reference (gpme_core.dynamics); and the compiled reduced solve, which forms only the lower
-triangle of N^T M N, on both sides of kernels.LAPACK_FROM."""
+triangle of N^T M N, on both sides of kernels.LAPACK_FROM.  The free solve of a serial chain
+(gpme_core.fast.chain_solve, which skips M) against the dense one: tests/test_chain_solve.py."""
 import numpy as np
 import pytest
 
@@ -86,8 +87,9 @@ def test_is_serial_reads_every_parent():
 @pytest.mark.parametrize("model_name", ["arm", "tree"])
 def test_compiled_evaluation_equals_reference_on_chain_and_tree(model_name, arm, tree, rng,
                                                                  monkeypatch):
-    """kernels.evaluate (the fused right-hand side, whichever path its terms take) against
-    the numpy reference of a free model: q_ddot to round-off in cond(M)."""
+    """kernels.evaluate (the fused right-hand side, whichever path its terms take; the arm's
+    free solve is the recursion gpme_core.fast.chain_solve, the tree's the dense Cholesky)
+    against the numpy reference of a free model: q_ddot to round-off in cond(M)."""
     model = {"arm": arm, "tree": tree}[model_name]
     system = ProgrammedMotion(model)
     n = model.n_coordinates
