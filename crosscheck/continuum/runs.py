@@ -57,6 +57,27 @@ def newton_absolute_tolerance(layout, elements, size, euler_bernoulli=False) -> 
     return ROUND_OFF_MARGIN * float(np.finfo(float).eps) * k * max(size, 1.0)
 
 
+def zero_initial_accelerations(layout) -> bool:
+    """True when the run starts from zero accelerations instead of Exudyn's: when a beam end
+    is clamped to a massless body (its carrying or tip link held nothing but beam).
+
+    Exudyn's start solves M a0 = f(q0), with no stiffness in it.  A massless body at a beam
+    end passes every moment reaching it (a joint spring or drive torque, the reaction of the
+    links beyond) to the end node's section rotary inertia alone, a mode far beyond the
+    step, so a0 is huge there and grows with the mesh.  Measured on the double pendulum (8
+    elements, Euler-Bernoulli limit): its 0.25 N m elbow spring gives Euler-parameter
+    accelerations of 6.3e6 /s^2 at the beam root, 30 /s^2 with the spring removed; the first
+    step's predictor then throws the stiffened elements far off and Newton diverges at the
+    3rd step (the TriFinger's distal spring: at the 2nd).  With a0 = 0 generalized-alpha's
+    start is first order (a velocity error O(h), which the step study measures: on the
+    pendulum without its spring 1.4e-4 rad in a joint at dt = 7.8e-5 s, against 3.6e-5
+    with Exudyn's a0); Exudyn's own a0 is not consistent either where constraints are user
+    functions (programmes, point constraints), which it ignores.  Models whose beam ends
+    carry inertia keep Exudyn's a0 and generalized-alpha's order 2."""
+    return any(layout.bodies[link].mass == 0.0 for b in layout.beams
+               for link in (b.carrying_link, b.tip_link))
+
+
 def rotation_vector(r: np.ndarray) -> np.ndarray:
     """(3,) rotation vector (axis times angle, rad) of a rotation matrix (angle < pi)."""
     c = np.clip(0.5 * (np.trace(r) - 1.0), -1.0, 1.0)
@@ -171,6 +192,9 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
     ti.newton.absoluteTolerance = newton_absolute_tolerance(layout, system.elements, size,
                                                             euler_bernoulli)
     ti.adaptiveStep = False
+    zero_start = zero_initial_accelerations(layout)
+    ti.generalizedAlpha.computeInitialAccelerations = not zero_start
+    ti.generalizedAlpha.resetAccelerations = zero_start
     # sparse LU: a beam mesh gives a banded system; the dense default grows as N^3
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     ok, message, wall, _ = solve_implicit(mbs, settings)
@@ -182,7 +206,7 @@ def continuum_run(model, q0, q_dot0, t_end: float, dt: float, output_dt: float, 
     df = pd.DataFrame([records[i] for i in sorted(records)])
     df.attrs.update(engine=ENGINE, dt=dt, elements=dict(system.elements), wall_time_s=wall,
                     euler_bernoulli=bool(euler_bernoulli),
-                    notes=list(system.notes))
+                    zero_initial_accelerations=zero_start, notes=list(system.notes))
     return df
 
 
