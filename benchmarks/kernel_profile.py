@@ -7,8 +7,9 @@ timed on its own, called in a compiled loop (no Python between calls), on the cr
 a seeded off-equilibrium state: the chain kinematics (T, S), the trace-form terms (M, h,
 g), the constraint rows (Phi, Phi_dot, A, kappa), the reduced solve (Gamma, N^T M N, its
 Cholesky factor, q_ddot, multipliers), the whole evaluation, and one step of the compiled
-RK4 loop (kernels.rk4_advance, four evaluations and the stage updates; a step of 1e-8 s so
-that the state stays where the parts were timed).  The last three columns are the free
+RK4 loop (kernels.rk4_advance, four evaluations and the stage updates, a batch of steps in
+one call as in a run; a step of 1e-8 s so that the state stays where the parts were
+timed).  The last three columns are the free
 crane (no constraints, the same state): its whole evaluation with the O(n) recursive solve
 (gpme_core.fast.chain_solve, M not formed), the same with M formed and solved by the dense
 Cholesky (kernels.OPT_DENSE_FREE_SOLVE), and its RK4 step.  Microseconds per call, best of 5
@@ -72,8 +73,9 @@ def _loop_evaluate(count, t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info):
 
 @numba.njit
 def _loop_rk4(count, y, md, cd, opts, ic, dc, fail_y):
-    for _ in range(count):
-        kernels.rk4_advance(0.0, y, RK4_STEP, 1, md, cd, opts, ic, dc, fail_y)
+    # count steps in one call, as a run takes them (rk4_advance's work arrays are made once
+    # per call: one call per step would time their allocation too)
+    kernels.rk4_advance(0.0, y, RK4_STEP, count, md, cd, opts, ic, dc, fail_y)
 
 
 @numba.njit

@@ -109,6 +109,13 @@ if ENABLED:
     # built from invalidates, not only one in their own file (gpme_core.jit_cache)
     from .jit_cache import kernel_jit
     _jit = kernel_jit(fastmath=False)
+    # the per-evaluation kernels that allocate nothing, return no array and call only
+    # kernels of their own kind (chain_into, terms_into, chain_solve and their helpers):
+    # compiled without numba's reference counting (its NRT), so that the views they carve
+    # from the caller's arrays cost no atomic increment and decrement each (measured:
+    # 0.3 of 2.9 us per free evaluation of the crane at n_rfe = 5, issue 29).  They must
+    # not call a function that returns an array (its reference would never be released)
+    _jit_leaf = kernel_jit(fastmath=False, _nrt=False)
     # generated code of the user's expressions (gpme_core.compiled): a division by zero
     # gives inf or nan as in numpy, for the caller's finiteness check to report, instead
     # of raising ZeroDivisionError out of the compiled loop
@@ -116,7 +123,7 @@ if ENABLED:
 else:  # pragma: no cover
     def _jit(f):
         return f
-    _jit_user = _jit
+    _jit_user = _jit_leaf = _jit
 
 
 def run(kernel, *args):
@@ -162,7 +169,7 @@ def chain(origins, generators, is_revolute, parents, q):
     return t_all, s_all
 
 
-@_jit
+@_jit_leaf
 def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scratch):
     """:func:`chain` into t_all, s_all (n, 4, 4); scratch (2, 4, 4) work space.
 
@@ -181,24 +188,41 @@ def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scrat
         for j in range(4):
             s_all[k, 3, j] = 0.0
         if is_revolute[k]:
-            # Rodrigues: R = I + sin K + (1 - cos) K^2, K = skew(axis)
+            # Rodrigues: R = I + sin K + (1 - cos) K^2, K = skew(axis); K^2 = a a^T - |a|^2 E
+            # written out from K's entries (K's zero diagonal drops the other products of
+            # K K exactly)
             s, c = np.sin(q[k]), np.cos(q[k])
-            for i in range(3):
-                for j in range(3):
-                    kk = generators[k, i, 0] * generators[k, 0, j] \
-                        + generators[k, i, 1] * generators[k, 1, j] \
-                        + generators[k, i, 2] * generators[k, 2, j]
-                    motion[i, j] += s * generators[k, i, j] + (1.0 - c) * kk
+            ax, ay, az = generators[k, 2, 1], generators[k, 0, 2], generators[k, 1, 0]
+            kk00, kk11, kk22 = -(az * az) - ay * ay, -(az * az) - ax * ax, -(ay * ay) - ax * ax
+            kk01, kk02, kk12 = ay * ax, az * ax, az * ay
+            one_c = 1.0 - c
+            motion[0, 0] += s * generators[k, 0, 0] + one_c * kk00
+            motion[0, 1] += s * generators[k, 0, 1] + one_c * kk01
+            motion[0, 2] += s * generators[k, 0, 2] + one_c * kk02
+            motion[1, 0] += s * generators[k, 1, 0] + one_c * kk01
+            motion[1, 1] += s * generators[k, 1, 1] + one_c * kk11
+            motion[1, 2] += s * generators[k, 1, 2] + one_c * kk12
+            motion[2, 0] += s * generators[k, 2, 0] + one_c * kk02
+            motion[2, 1] += s * generators[k, 2, 1] + one_c * kk12
+            motion[2, 2] += s * generators[k, 2, 2] + one_c * kk22
         else:
             for i in range(3):
                 motion[i, 3] = generators[k, i, 3] * q[k]
-        # local = origin @ motion
-        for i in range(3):
-            for j in range(3):
-                local[i, j] = origins[k, i, 0] * motion[0, j] + origins[k, i, 1] * motion[1, j] \
-                    + origins[k, i, 2] * motion[2, j]
-            local[i, 3] = origins[k, i, 0] * motion[0, 3] + origins[k, i, 1] * motion[1, 3] \
-                + origins[k, i, 2] * motion[2, 3] + origins[k, i, 3]
+        # local = origin @ motion; an origin without rotation (the RFEM's coincident
+        # joints, most links of a chain) only shifts the translation: the products with its
+        # identity block are exact and left out
+        if _rotation_is_identity(origins, k):
+            for i in range(3):
+                for j in range(3):
+                    local[i, j] = motion[i, j]
+                local[i, 3] = motion[i, 3] + origins[k, i, 3]
+        else:
+            for i in range(3):
+                for j in range(3):
+                    local[i, j] = origins[k, i, 0] * motion[0, j] \
+                        + origins[k, i, 1] * motion[1, j] + origins[k, i, 2] * motion[2, j]
+                local[i, 3] = origins[k, i, 0] * motion[0, 3] + origins[k, i, 1] * motion[1, 3] \
+                    + origins[k, i, 2] * motion[2, 3] + origins[k, i, 3]
         p = parents[k]
         if p < 0:
             for i in range(3):
@@ -209,8 +233,15 @@ def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scrat
                 for j in range(3):
                     t_all[k, i, j] = t_all[p, i, 0] * local[0, j] + t_all[p, i, 1] * local[1, j] \
                         + t_all[p, i, 2] * local[2, j]
-                t_all[k, i, 3] = t_all[p, i, 0] * local[0, 3] + t_all[p, i, 1] * local[1, 3] \
-                    + t_all[p, i, 2] * local[2, 3] + t_all[p, i, 3]
+            if local[0, 3] == 0.0 and local[1, 3] == 0.0 and local[2, 3] == 0.0:
+                # a joint at its parent's origin: the translation is the parent's (exact)
+                for i in range(3):
+                    t_all[k, i, 3] = t_all[p, i, 3]
+            else:
+                for i in range(3):
+                    t_all[k, i, 3] = t_all[p, i, 0] * local[0, 3] \
+                        + t_all[p, i, 1] * local[1, 3] + t_all[p, i, 2] * local[2, 3] \
+                        + t_all[p, i, 3]
         t_all[k, 3, 0], t_all[k, 3, 1], t_all[k, 3, 2], t_all[k, 3, 3] = 0.0, 0.0, 0.0, 1.0
         if is_revolute[k]:
             # S = [[W, -W p], [0, 0]],  W = R K R^T = skew(R k): the axis k = (K[2, 1],
@@ -232,6 +263,16 @@ def chain_into(origins, generators, is_revolute, parents, q, t_all, s_all, scrat
                     + t_all[k, i, 1] * generators[k, 1, 3] + t_all[k, i, 2] * generators[k, 2, 3]
 
 
+@_jit_leaf
+def _rotation_is_identity(transforms, k):
+    """True when transforms[k] (4, 4) has the rotation block E exactly (a translation only)."""
+    return (transforms[k, 0, 0] == 1.0 and transforms[k, 1, 1] == 1.0
+            and transforms[k, 2, 2] == 1.0 and transforms[k, 0, 1] == 0.0
+            and transforms[k, 0, 2] == 0.0 and transforms[k, 1, 0] == 0.0
+            and transforms[k, 1, 2] == 0.0 and transforms[k, 2, 0] == 0.0
+            and transforms[k, 2, 1] == 0.0)
+
+
 @_jit
 def terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot):
     """(M (n, n), h (n,), g (n,)) in trace form with composite world pseudo-inertias."""
@@ -247,10 +288,14 @@ def terms(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot):
 @_jit
 def terms_scratch_size(n):
     """Length of the float scratch of :func:`terms_into` for n coordinates."""
-    return 5 * 16 * n + 4 * n + 6 * n + n + 3 * 16
+    return 16 * N_TERMS_BLOCKS * n + 16 * N_TERMS_SMALL + 6 * n + n + n
 
 
-@_jit
+N_TERMS_BLOCKS = 6      # (n, 4, 4) arrays of terms_into's scratch: hw, B, V, Hc, Gc, wc
+N_TERMS_SMALL = 3       # its (4, 4) work matrices
+
+
+@_jit_leaf
 def is_serial(parents):
     """True when the joints form one serial chain (parents[k] = k - 1 for every k)."""
     for k in range(parents.shape[0]):
@@ -268,7 +313,7 @@ def world_pseudo_inertias(scratch, n):
     return scratch[:16 * n].reshape((n, 4, 4))
 
 
-@_jit
+@_jit_leaf
 def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h, g,
                scratch, serial=-1, form_mass=True):
     """:func:`terms` into m (n, n), h (n,), g (n,); scratch (terms_scratch_size(n),).
@@ -281,22 +326,42 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
     serial chain (``serial`` 1, or -1 and :func:`is_serial`) keeps one running sum from the
     tip (index 0 of hc, gc, wc); a tree (``serial`` 0) keeps each joint's sum and adds it
     to its parent's.  Arrays are indexed in full rather than through per-link views (a
-    view costs a reference count)."""
+    view costs a reference count).
+
+    Structure used (every product left out is an exact zero, so the results are those of
+    the full 4 x 4 products, bit for bit for finite values): a massless link (H = 0, the
+    RFEM's links between its coincident joints) has hw = 0 and adds nothing to Hc, Gc, wc;
+    S_j's rotation block has a zero diagonal, so the trace tr(S_j Gc_j^T) and S_j wc_j
+    skip it and Gc's diagonal is not formed; without M (``form_mass`` False) a chain's Hc
+    is not accumulated."""
     n = q_dot.shape[0]
     if serial < 0:
         serial = 1 if is_serial(parents) else 0
-    hw = world_pseudo_inertias(scratch, n)
-    b_all = scratch[16 * n:32 * n].reshape((n, 4, 4))
-    v_all = scratch[32 * n:48 * n].reshape((n, 4, 4))
-    hc = scratch[48 * n:64 * n].reshape((n, 4, 4))
-    gc = scratch[64 * n:80 * n].reshape((n, 4, 4))
-    wl = scratch[80 * n:84 * n].reshape((n, 4))
-    s6 = scratch[84 * n:90 * n].reshape((6, n))
-    column = scratch[90 * n:91 * n]
-    small = scratch[91 * n:91 * n + 3 * 16].reshape((3, 4, 4))
-    th, tmp = small[0], small[1]
-    wc = small[2] if serial else wl           # a chain's running wc: its row 0
+    # the (4, 4) blocks are carved from one reshaped view (a reshape costs a call, a slice
+    # of the first axis does not); hw first: world_pseudo_inertias reads it there
+    n_blocks = N_TERMS_BLOCKS * n + N_TERMS_SMALL
+    blocks = scratch[:16 * n_blocks].reshape((n_blocks, 4, 4))
+    hw = blocks[:n]
+    b_all = blocks[n:2 * n]
+    v_all = blocks[2 * n:3 * n]
+    hc = blocks[3 * n:4 * n]
+    gc = blocks[4 * n:5 * n]
+    wc = blocks[5 * n:6 * n]                  # wc_j in row 0 of block j (a chain: block 0)
+    th, tmp = blocks[6 * n], blocks[6 * n + 1]
+    used = 16 * n_blocks
+    s6 = scratch[used:used + 6 * n].reshape((6, n))
+    column = scratch[used + 6 * n:used + 7 * n]
+    massive = scratch[used + 7 * n:used + 8 * n]   # 1.0 a link with mass, 0.0 a massless one
     for l in range(n):
+        if _is_zero_4x4(pseudo_inertias, l):
+            # a massless link (the RFEM's links between coincident joints): hw = 0, and
+            # every product with it below is an exact zero, left out
+            massive[l] = 0.0
+            for i in range(4):
+                for j in range(4):
+                    hw[l, i, j] = 0.0
+            continue
+        massive[l] = 1.0
         # T H (its last row is H's: T's last row is (0, 0, 0, 1))
         for i in range(3):
             for j in range(4):
@@ -313,12 +378,10 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                 hw[l, j, i] = v
             hw[l, i, 3] = th[i, 3]
             hw[l, 3, i] = th[i, 3]
-            wl[l, i] = th[i, 3]
         hw[l, 3, 3] = pseudo_inertias[l, 3, 3]
-        wl[l, 3] = pseudo_inertias[l, 3, 3]
     if serial:
         for a in range(4):
-            wc[0, a] = 0.0
+            wc[0, 0, a] = 0.0
             for c in range(4):
                 hc[0, a, c] = 0.0
                 gc[0, a, c] = 0.0
@@ -330,6 +393,7 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                 for j in range(4):
                     hc[l, i, j] = hw[l, i, j]
                     gc[l, i, j] = 0.0
+                wc[l, 0, i] = hw[l, i, 3]       # the first moments: T H's last column
     # velocity-product accelerations B_l (T_ddot^(l) at q_ddot = 0 is B_l T^(l)):
     # B_l = B_p(l) + (2 V_p(l) + S_l qd_l) S_l qd_l,  V_l = V_p(l) + S_l qd_l.  S, V and B
     # have a zero last row: only the first three are formed, and S's zero last row drops
@@ -351,10 +415,14 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                     tmp[i, j] = 2.0 * v_all[p, i, j] + sw
                     b_all[l, i, j] = b_all[p, i, j]
                     v_all[l, i, j] = v_all[p, i, j] + sw
+        # (the zero diagonal of S's rotation block drops one of the three products in
+        # each of its columns)
         for i in range(3):
-            for j in range(4):
-                b_all[l, i, j] += w * (tmp[i, 0] * s_all[l, 0, j] + tmp[i, 1] * s_all[l, 1, j]
-                                       + tmp[i, 2] * s_all[l, 2, j])
+            b_all[l, i, 0] += w * (tmp[i, 1] * s_all[l, 1, 0] + tmp[i, 2] * s_all[l, 2, 0])
+            b_all[l, i, 1] += w * (tmp[i, 0] * s_all[l, 0, 1] + tmp[i, 2] * s_all[l, 2, 1])
+            b_all[l, i, 2] += w * (tmp[i, 0] * s_all[l, 0, 2] + tmp[i, 1] * s_all[l, 1, 2])
+            b_all[l, i, 3] += w * (tmp[i, 0] * s_all[l, 0, 3] + tmp[i, 1] * s_all[l, 1, 3]
+                                   + tmp[i, 2] * s_all[l, 2, 3])
     # S_i = [[W_i, v_i], [0, 0]] with W_i skew: tr(S_i Y^T) = sum over a < c < 3 of
     # S_i[a, c] (Y[a, c] - Y[c, a]) + sum_a S_i[a, 3] Y[a, 3].  s6[e, i] holds S_i's six
     # independent entries (01, 02, 12, 03, 13, 23), so that each row of M below is a sum
@@ -365,28 +433,36 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
             s6[3, i], s6[4, i], s6[5, i] = s_all[i, 0, 3], s_all[i, 1, 3], s_all[i, 2, 3]
     for j in range(n - 1, -1, -1):
         c_j = 0 if serial else j                  # where joint j's sums are
-        if serial:
+        if serial and massive[j] != 0.0:
+            if form_mass:
+                for a in range(4):
+                    for c in range(4):
+                        hc[0, a, c] += hw[j, a, c]
             for a in range(4):
+                wc[0, 0, a] += hw[j, a, 3]
+        # Gc_j += B_j hw_j (B_j: three rows), without the diagonal: the trace below pairs
+        # it with S_j's zero diagonal (constant loops: unrolled, the test compiles away)
+        if massive[j] != 0.0:
+            for a in range(3):
                 for c in range(4):
-                    hc[0, a, c] += hw[j, a, c]
-                wc[0, a] += wl[j, a]
-        # Gc_j += B_j hw_j (B_j: three rows)
-        for a in range(3):
-            for c in range(4):
-                gc[c_j, a, c] += b_all[j, a, 0] * hw[j, 0, c] + b_all[j, a, 1] * hw[j, 1, c] \
-                    + b_all[j, a, 2] * hw[j, 2, c] + b_all[j, a, 3] * hw[j, 3, c]
+                    if c != a:
+                        gc[c_j, a, c] += b_all[j, a, 0] * hw[j, 0, c] \
+                            + b_all[j, a, 1] * hw[j, 1, c] + b_all[j, a, 2] * hw[j, 2, c] \
+                            + b_all[j, a, 3] * hw[j, 3, c]
         if form_mass:
             _mass_row(j, s_all, hc, c_j, s6, serial, moves, column, m)
         acc = 0.0
         for a in range(3):
             for c in range(4):
-                acc += s_all[j, a, c] * gc[c_j, a, c]
+                if c != a:
+                    acc += s_all[j, a, c] * gc[c_j, a, c]
         h[j] = -acc
         gj = 0.0
         for a in range(3):
             sw = 0.0
             for c in range(4):
-                sw += s_all[j, a, c] * wc[c_j, c]
+                if c != a:                    # S_j's zero diagonal
+                    sw += s_all[j, a, c] * wc[c_j, 0, c]
             gj += gamma[a] * sw
         g[j] = -gj
         p = parents[j]
@@ -395,10 +471,20 @@ def terms_into(t_all, s_all, pseudo_inertias, gamma, parents, moves, q_dot, m, h
                 for c in range(4):
                     hc[p, a, c] += hc[j, a, c]
                     gc[p, a, c] += gc[j, a, c]
-                wc[p, a] += wc[j, a]
+                wc[p, 0, a] += wc[j, 0, a]
 
 
-@_jit
+@_jit_leaf
+def _is_zero_4x4(mats, l):
+    """True when every entry of mats[l] (4, 4) is an exact zero."""
+    for i in range(4):
+        for j in range(4):
+            if mats[l, i, j] != 0.0:
+                return False
+    return True
+
+
+@_jit_leaf
 def _mass_row(j, s_all, hc, c_j, s6, serial, moves, column, m):
     """Row and column j of M up to the diagonal: m_ij = m_ji = tr(S_i Hc_j S_j^T) for
     i <= j (zero where joint i does not move link j: other branches of a tree); Hc_j is
@@ -533,6 +619,7 @@ ANGULAR = 0          # where omega (rad/s) and the moment (N m) start in a spati
 LINEAR = 3           # where v (m/s) and the force (N) start
 SCRATCH_PER_JOINT = N_TWIST + 2                 # U_i (6), D_i, w_i
 SCRATCH_FIXED = N_TWIST * N_TWIST + 2 * N_TWIST  # I^A (6, 6), p^A / a (6), u_i (6)
+FIXED_ROWS = N_TWIST + 2                        # the fixed part as rows of six
 
 
 @_jit
@@ -541,7 +628,7 @@ def chain_solve_scratch_size(n):
     return SCRATCH_PER_JOINT * n + SCRATCH_FIXED
 
 
-@_jit
+@_jit_leaf
 def unit_twist_into(s_all, i, u):
     """u (6,) = (omega_i rad, v_i m) per unit q_dot_i: the world unit twist of joint i from
     its world twist matrix s_all[i] (4, 4) = [[skew(omega_i), v_i], [0, 0]]."""
@@ -549,7 +636,7 @@ def unit_twist_into(s_all, i, u):
     u[LINEAR], u[LINEAR + 1], u[LINEAR + 2] = s_all[i, 0, 3], s_all[i, 1, 3], s_all[i, 2, 3]
 
 
-@_jit
+@_jit_leaf
 def add_spatial_inertia(hw, link, inertia):
     """inertia (6, 6) += the spatial inertia of ``link`` about the world origin, ordered
     (omega, v), from its world pseudo-inertia hw[link] (4, 4):
@@ -579,7 +666,7 @@ def add_spatial_inertia(hw, link, inertia):
         inertia[LINEAR + a, LINEAR + a] += mass
 
 
-@_jit
+@_jit_leaf
 def chain_solve(s_all, hw, b, q_ddot, scratch):
     """q_ddot (n,) = M^-1 b for a serial chain (parents[k] = k - 1) by the articulated-body
     recursion in the world frame (module docstring, "Free solve"); False, q_ddot unset,
@@ -593,20 +680,22 @@ def chain_solve(s_all, hw, b, q_ddot, scratch):
     scratch (chain_solve_scratch_size(n),) floats (nothing is allocated).
     M itself is not formed."""
     n = b.shape[0]
-    joint_force = scratch[:N_TWIST * n].reshape((n, N_TWIST))     # U_i = I^A u_i
-    pivot = scratch[N_TWIST * n:(N_TWIST + 1) * n]                 # D_i = u_i^T U_i
-    reduced_b = scratch[(N_TWIST + 1) * n:SCRATCH_PER_JOINT * n]   # w_i = b_i - u_i^T p^A
-    used = SCRATCH_PER_JOINT * n
-    articulated = scratch[used:used + N_TWIST * N_TWIST].reshape((N_TWIST, N_TWIST))
-    used += N_TWIST * N_TWIST
-    transmitted = scratch[used:used + N_TWIST]     # p^A on the way back, then a forward
-    u = scratch[used + N_TWIST:used + 2 * N_TWIST]
+    # rows of six carved from one reshaped view (a reshape costs a call, a slice does not)
+    rows = scratch[:N_TWIST * (n + FIXED_ROWS)].reshape((n + FIXED_ROWS, N_TWIST))
+    joint_force = rows[:n]                          # U_i = I^A u_i
+    articulated = rows[n:n + N_TWIST]               # I^A (6, 6)
+    transmitted = rows[n + N_TWIST]                 # p^A on the way back, then a forward
+    u = rows[n + N_TWIST + 1]
+    used = N_TWIST * (n + FIXED_ROWS)
+    pivot = scratch[used:used + n]                  # D_i = u_i^T U_i
+    reduced_b = scratch[used + n:used + 2 * n]      # w_i = b_i - u_i^T p^A
     for a in range(N_TWIST):
         transmitted[a] = 0.0
         for c in range(N_TWIST):
             articulated[a, c] = 0.0
     for i in range(n - 1, -1, -1):
-        add_spatial_inertia(hw, i, articulated)
+        if not _is_zero_4x4(hw, i):          # a massless link adds nothing
+            add_spatial_inertia(hw, i, articulated)
         unit_twist_into(s_all, i, u)
         d = 0.0
         u_dot_p = 0.0
@@ -623,12 +712,14 @@ def chain_solve(s_all, hw, b, q_ddot, scratch):
         w = b[i] - u_dot_p
         reduced_b[i] = w
         inv_d = 1.0 / d
-        # I^A -= U U^T / D, formed as (U_a U_c) (1 / D) so that I^A stays exactly symmetric
+        # I^A -= U U^T / D, formed as (U_a U_c) (1 / D) so that I^A stays exactly symmetric:
+        # its lower triangle, mirrored
         for a in range(N_TWIST):
             fa = joint_force[i, a]
             transmitted[a] += fa * (w * inv_d)
-            for c in range(N_TWIST):
+            for c in range(a + 1):
                 articulated[a, c] -= (fa * joint_force[i, c]) * inv_d
+                articulated[c, a] = articulated[a, c]
     acceleration = transmitted
     for a in range(N_TWIST):
         acceleration[a] = 0.0

@@ -55,9 +55,9 @@ import math
 
 import numpy as np
 
-from .fast import (POINT_SCRATCH, _jit, chain_into, chain_solve, chain_solve_scratch_size,
-                   is_serial, multipliers_into, point_into, terms_into, terms_scratch_size,
-                   world_pseudo_inertias)
+from .fast import (POINT_SCRATCH, _jit, chain_into, chain_solve,
+                   chain_solve_scratch_size, is_serial, multipliers_into, point_into, terms_into,
+                   terms_scratch_size)
 
 # ---------------------------------------------------------------- status codes
 OK = 0
@@ -162,6 +162,22 @@ def constraint_parts(cd):
     f_par = cf[o + 6 * n_spring:]
     return (c_kind, c_point, c_fun, c_par, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun,
             c_point_b, s_a, s_b, s_par)
+
+
+@_jit
+def drive_parts(cd):
+    """(f_kind, f_off, f_par, d_coord, d_fun) views of cd: what the drives read, without
+    the reshaped views of :func:`constraint_parts` (a reshape costs a call)."""
+    ci, cf = cd
+    m, n_points, n_fun, n_drive, n_spring = ci[0], ci[1], ci[2], ci[3], ci[4]
+    o = 5 + 4 * m + n_points
+    f_kind = ci[o:o + n_fun]
+    f_off = ci[o + n_fun:o + 2 * n_fun]
+    o += 2 * n_fun
+    d_coord = ci[o:o + n_drive]
+    d_fun = ci[o + n_drive:o + 2 * n_drive]
+    f_par = cf[4 * m + 4 * n_points + 6 * n_spring:]
+    return f_kind, f_off, f_par, d_coord, d_fun
 
 
 @_jit
@@ -655,21 +671,25 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     """Status of one evaluation at (t s, q (n,), q_dot (n,)); fills q_ddot (n,), lam (m,)
     and info (INFO_SIZE,) = (partition rcond, q_dot.d (W), q_dot.t (W), q_dot.A^T lam (W),
     0).  ws: float workspace of workspace_size(n, m, n_points) (nothing is allocated)."""
-    origins, generators, is_revolute, pseudo, gamma, stiffness, q_ref, damping, _, _, \
-        parents, moves = model_parts(md)
-    _, _, _, _, p_link, p_r, f_kind, f_off, f_par, d_coord, d_fun, _, s_a, s_b, s_par = \
-        constraint_parts(cd)
+    # md read directly rather than through model_parts: each view costs a reference count,
+    # and the limits are not needed here
+    mats, vecs, gamma, parents, moves = md
+    origins, generators, pseudo = mats[0], mats[1], mats[2]
+    is_revolute, stiffness, q_ref, damping = vecs[0], vecs[1], vecs[2], vecs[3]
     alpha, beta, paper_eq7, switch_below, singular_rcond = opts[0], opts[1], opts[2], \
         opts[3], opts[4]
     n = q.shape[0]
     k = dc.shape[0]
     n_points = cd[0][1]
-    t_all = ws[:16 * n].reshape((n, 4, 4))
-    s_all = ws[16 * n:32 * n].reshape((n, 4, 4))
-    used = 32 * n
+    # T, S, chain_into's two work matrices and the world pseudo-inertias at the head of
+    # terms_into's scratch: (4, 4) blocks of one reshaped view (a reshape costs a call, a
+    # slice of the first axis does not)
+    blocks = ws[:16 * (3 * n + 2)].reshape((3 * n + 2, 4, 4))
+    t_all = blocks[:n]
+    s_all = blocks[n:2 * n]
     chain_into(origins, generators, is_revolute, parents, q, t_all, s_all,
-               ws[used:used + 32].reshape((2, 4, 4)))
-    used += 32
+               blocks[2 * n:2 * n + 2])
+    used = 32 * n + 32
     size = terms_scratch_size(n)
     terms_scratch = ws[used:used + size]
     used += size
@@ -690,11 +710,14 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
         if paper_eq7 != 0.0:
             rhs[i] -= d_i
         w_diss += q_dot[i] * d_i
-    for i in range(d_coord.shape[0]):
-        time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
-        rhs[d_coord[i]] += tf[0]
-        w_drive += q_dot[d_coord[i]] * tf[0]
-    if s_a.shape[0]:
+    if cd[0][3]:                     # drives (their views: only then)
+        f_kind, f_off, f_par, d_coord, d_fun = drive_parts(cd)
+        for i in range(d_coord.shape[0]):
+            time_function(f_kind[d_fun[i]], f_off[d_fun[i]], f_par, t, tf)
+            rhs[d_coord[i]] += tf[0]
+            w_drive += q_dot[d_coord[i]] * tf[0]
+    if cd[0][4]:                     # point springs (constraint_parts: only then)
+        _, _, _, _, p_link, p_r, _, _, _, _, _, _, s_a, s_b, s_par = constraint_parts(cd)
         size = SPRING_SCRATCH_PER_N * n + SPRING_SCRATCH
         w_spring = _point_springs(t_all, s_all, moves, q_dot, p_link, p_r, s_a, s_b, s_par,
                                   paper_eq7, rhs, ws[used:used + size])
@@ -705,6 +728,16 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     info[0], info[1], info[2], info[3], info[4] = 1.0, w_diss, w_drive, 0.0, 0.0
     if not (math.isfinite(w_drive)):
         return NOT_FINITE
+    # the constraint machinery's work arrays (below) and chain_solve's scratch after them;
+    # a free system takes neither view of the former (a view costs a reference count)
+    rows_size = rows_scratch_size(n, n_points)
+    reduced_size = reduced_scratch_size(n, k)
+    solve_at = used + 5 * k + k * n + rows_size + reduced_size
+    if recursive:
+        hw = blocks[2 * n + 2:]     # = fast.world_pseudo_inertias(terms_scratch, n)
+        ok = chain_solve(s_all, hw, rhs, q_ddot,
+                         ws[solve_at:solve_at + chain_solve_scratch_size(n)])
+        return OK if ok else SINGULAR_REDUCED
     phi = ws[used:used + k]
     phi_dot = ws[used + k:used + 2 * k]
     kappa = ws[used + 2 * k:used + 3 * k]
@@ -712,15 +745,10 @@ def evaluate(t, q, q_dot, md, cd, opts, ic, dc, q_ddot, lam, info, ws):
     used += 5 * k
     a = ws[used:used + k * n].reshape((k, n))
     used += k * n
-    size = rows_scratch_size(n, n_points)
-    rows_scratch = ws[used:used + size]
-    used += size
-    reduced_scratch = ws[used:used + reduced_scratch_size(n, k)]
-    used += reduced_scratch_size(n, k)
-    if recursive:
-        ok = chain_solve(s_all, world_pseudo_inertias(terms_scratch, n), rhs, q_ddot,
-                         ws[used:used + chain_solve_scratch_size(n)])
-        return OK if ok else SINGULAR_REDUCED
+    rows_scratch = ws[used:used + rows_size]
+    used += rows_size
+    reduced_scratch = ws[used:used + reduced_size]
+    used += reduced_size
     if k == 0:
         low = reduced_scratch[n:n + n * n].reshape((n, n))
         ok = _cholesky_solve(m_mat, rhs, low, q_ddot)
@@ -763,11 +791,18 @@ def derivative(t, y, md, cd, opts, ic, dc, dy, lam, info, ws):
     """dy = (q_dot, q_ddot, W rates) of the integrated state y (2 n + 3,); status.
     ws: the workspace of :func:`evaluate`."""
     n = md[1].shape[1]
-    q_ddot = dy[n:2 * n]
-    status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, q_ddot, lam, info, ws)
-    dy[:n] = y[n:2 * n]
-    dy[2 * n], dy[2 * n + 1], dy[2 * n + 2] = info[1], info[2], info[3]
+    status = evaluate(t, y[:n], y[n:2 * n], md, cd, opts, ic, dc, dy[n:2 * n], lam, info, ws)
+    _rates(y, dy, info, n)
     return status
+
+
+@_jit
+def _rates(y, dy, info, n):
+    """dy's q_dot part from y and its W rates from info: what :func:`evaluate` does not
+    fill of :func:`derivative`'s dy."""
+    for i in range(n):
+        dy[i] = y[n + i]
+    dy[2 * n], dy[2 * n + 1], dy[2 * n + 2] = info[1], info[2], info[3]
 
 
 @_jit
@@ -776,7 +811,11 @@ def rk4_advance(t0, y, dt, n_steps, md, cd, opts, ic, dc, fail_y):
 
     Returns (status, steps done, t of the failure): on a failed evaluation y stays at the
     start of the failing step and fail_y holds the state evaluated; on a state that
-    diverges or leaves its range, fail_y holds it (y the step before)."""
+    diverges or leaves its range, fail_y holds it (y the step before).
+
+    Each stage is :func:`derivative` written out: :func:`evaluate` on views of the state
+    and of the stage's slope made once per call (a view costs a reference count, and a
+    call layer the copying of its many arguments, per stage)."""
     size = y.shape[0]
     n = (size - N_WORK) // 2
     k1, k2, k3, k4 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
@@ -784,37 +823,46 @@ def rk4_advance(t0, y, dt, n_steps, md, cd, opts, ic, dc, fail_y):
     lam = np.empty(dc.shape[0])
     info = np.empty(INFO_SIZE)
     ws = np.empty(workspace_size(n, dc.shape[0], cd[0][1]))
+    y_q, y_v, stage_q, stage_v = y[:n], y[n:2 * n], stage[:n], stage[n:2 * n]
+    k1_a, k2_a, k3_a, k4_a = k1[n:2 * n], k2[n:2 * n], k3[n:2 * n], k4[n:2 * n]
     for step in range(n_steps):
         t = t0 + step * dt
-        st = derivative(t, y, md, cd, opts, ic, dc, k1, lam, info, ws)
+        st = evaluate(t, y_q, y_v, md, cd, opts, ic, dc, k1_a, lam, info, ws)
         if st != OK:
             fail_y[:] = y
             return st, step, t
+        _rates(y, k1, info, n)
         for i in range(size):
             stage[i] = y[i] + 0.5 * dt * k1[i]
-        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k2, lam, info, ws)
+        st = evaluate(t + 0.5 * dt, stage_q, stage_v, md, cd, opts, ic, dc, k2_a, lam, info,
+                      ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + 0.5 * dt
+        _rates(stage, k2, info, n)
         for i in range(size):
             stage[i] = y[i] + 0.5 * dt * k2[i]
-        st = derivative(t + 0.5 * dt, stage, md, cd, opts, ic, dc, k3, lam, info, ws)
+        st = evaluate(t + 0.5 * dt, stage_q, stage_v, md, cd, opts, ic, dc, k3_a, lam, info,
+                      ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + 0.5 * dt
+        _rates(stage, k3, info, n)
         for i in range(size):
             stage[i] = y[i] + dt * k3[i]
-        st = derivative(t + dt, stage, md, cd, opts, ic, dc, k4, lam, info, ws)
+        st = evaluate(t + dt, stage_q, stage_v, md, cd, opts, ic, dc, k4_a, lam, info, ws)
         if st != OK:
             fail_y[:] = stage
             return st, step, t + dt
+        _rates(stage, k4, info, n)
         for i in range(size):
             stage[i] = y[i] + (dt / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         st = state_status(stage, n, md, opts[5])
         if st != OK:
             fail_y[:] = stage
             return st, step, t + dt
-        y[:] = stage
+        for i in range(size):
+            y[i] = stage[i]
     return OK, n_steps, t0 + n_steps * dt
 
 

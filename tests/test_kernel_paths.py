@@ -4,10 +4,13 @@ joint's subtree sums added to its parent's), against each other and against the 
 reference (gpme_core.dynamics); and the compiled reduced solve, which forms only the lower
 triangle of N^T M N, on both sides of kernels.LAPACK_FROM.  The free solve of a serial chain
 (gpme_core.fast.chain_solve, which skips M) against the dense one: tests/test_chain_solve.py."""
+import sys
+
 import numpy as np
 import pytest
 
 from gpme_core import dynamics as dy
+from gpme_core import kinematics as kin
 from gpme_core import compiled, fast, kernels
 from gpme_core.gpme import ProgrammedMotion, _numpy_reduced_solve
 from gpme_examples.crane import build_crane
@@ -130,3 +133,95 @@ def test_reduced_solve_from_the_lower_triangle_equals_numpy(n, rng):
     np.testing.assert_allclose(q_ddot, ref_q_ddot, rtol=0, atol=scale * np.abs(ref_q_ddot).max())
     np.testing.assert_allclose(lam, ref_lam, rtol=0, atol=scale * np.abs(ref_lam).max())
     np.testing.assert_allclose(a @ q_ddot, c, rtol=0, atol=scale * np.abs(c).max())
+
+
+def test_leaf_kernels_without_reference_counting_release_what_they_are_given(rng):
+    """chain_into, terms_into and chain_solve are compiled without numba's reference
+    counting (gpme_core.fast._jit_leaf) and are given views carved by reference-counted
+    callers (kernels.evaluate, rk4_advance): after many calls every array handed in holds
+    as many references as before (a view whose reference is never released would keep
+    its array, a run's workspace, alive for ever)."""
+    model = build_crane(3)
+    system = ProgrammedMotion(model)
+    cs, reason = compiled.for_system(system)
+    assert cs is not None, reason
+    n = model.n_coordinates
+    q, q_dot = rng.uniform(-0.5, 0.5, n), rng.uniform(-1, 1, n)
+    q_ddot, lam, info = np.empty(n), np.empty(0), np.empty(kernels.INFO_SIZE)
+    ws = np.empty(kernels.workspace_size(n, 0, cs.cd[0][1]))
+    given = (q, q_dot, q_ddot, ws, *cs.md)
+    before = [sys.getrefcount(a) for a in given]
+    for _ in range(50):
+        assert kernels.evaluate(0.0, q, q_dot, cs.md, cs.cd, cs.options(), system.ic,
+                                system.dc, q_ddot, lam, info, ws) == kernels.OK
+    y = np.concatenate([q, q_dot, np.zeros(kernels.N_WORK)])
+    status, _, _ = kernels.rk4_advance(0.0, y, 1e-6, 20, cs.md, cs.cd, cs.options(),
+                                       system.ic, system.dc, np.empty_like(y))
+    assert status == kernels.OK
+    assert [sys.getrefcount(a) for a in given] == before
+
+
+@pytest.mark.parametrize("n_rfe", [0, 3])
+def test_rk4_loop_equals_its_stages_from_derivative(n_rfe, rng):
+    """kernels.rk4_advance writes each stage out (evaluate on views made once per call)
+    instead of calling kernels.derivative: its steps equal classical RK4 formed from
+    derivative, bit for bit, on the free crane (the recursive solve, massless links)."""
+    system = ProgrammedMotion(build_crane(n_rfe))
+    cs, reason = compiled.for_system(system)
+    assert cs is not None, reason
+    n = system.model.n_coordinates
+    y0 = np.concatenate([rng.uniform(-0.3, 0.3, n), rng.uniform(-1, 1, n),
+                         np.zeros(kernels.N_WORK)])
+    dt, steps = 1e-4, 3
+    y = y0.copy()
+    status, done, _ = kernels.rk4_advance(0.0, y, dt, steps, cs.md, cs.cd, cs.options(),
+                                          system.ic, system.dc, np.empty_like(y))
+    assert (status, done) == (kernels.OK, steps)
+    ws = np.empty(kernels.workspace_size(n, 0, cs.cd[0][1]))
+    lam, info = np.empty(0), np.empty(kernels.INFO_SIZE)
+
+    def slope(t, state):
+        dy_ = np.empty_like(state)
+        assert kernels.derivative(t, state, cs.md, cs.cd, cs.options(), system.ic, system.dc,
+                                  dy_, lam, info, ws) == kernels.OK
+        return dy_
+
+    ref = y0.copy()
+    for step in range(steps):
+        t = 0.0 + step * dt
+        k1 = slope(t, ref)
+        k2 = slope(t + 0.5 * dt, ref + 0.5 * dt * k1)
+        k3 = slope(t + 0.5 * dt, ref + 0.5 * dt * k2)
+        k4 = slope(t + dt, ref + dt * k3)
+        ref = ref + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    np.testing.assert_array_equal(y, ref)
+
+
+def test_massless_links_and_plain_origins_take_their_short_paths_to_the_reference(rng):
+    """The crane's RFEM links between its coincident joints are massless and their joints'
+    origins have no rotation: terms_into leaves their exact-zero products out, chain_into
+    the identity block of their origins.  With the free solve's settings (no M) h, g and
+    the world pseudo-inertias equal those of the full path (M formed) bit for bit, and
+    all equal the numpy reference to round-off."""
+    model = build_crane(4)
+    assert any(not model.pseudo_inertias[l].any() for l in range(model.n_coordinates))
+    n = model.n_coordinates
+    q, q_dot = rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)
+    t_all, s_all = fast.chain(model.origins, model.generators, model.is_revolute,
+                              model.parents, q)
+    ref_t = kin.link_transforms(model, q)
+    for name, a, b in (("T", t_all, ref_t), ("S", s_all, kin.joint_twists(model, ref_t))):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-14 * max(1.0, np.abs(b).max()),
+                                   err_msg=name)
+    out = {}
+    for form_mass in (True, False):
+        m, h, g = np.zeros((n, n)), np.empty(n), np.empty(n)
+        scratch = np.empty(fast.terms_scratch_size(n))
+        fast.terms_into(t_all, s_all, model.pseudo_inertias, np.append(model.gravity, 0.0),
+                        model.parents, model.moves, q_dot, m, h, g, scratch, -1, form_mass)
+        out[form_mass] = (h, g, fast.world_pseudo_inertias(scratch, n).copy(), m)
+    for a, b in zip(out[True][:3], out[False][:3]):
+        np.testing.assert_array_equal(a, b)
+    assert not out[False][3].any()                 # M left unset (zeros as given)
+    _assert_round_off((out[True][3], out[True][0], out[True][1]), _reference(model, q, q_dot),
+                      model.name)
