@@ -20,6 +20,6 @@ def engine_first_step(scenario, engine: str, default_dt: float,
         return float(default_dt), "", default_budget
     budget = default_budget if override.max_halvings is None else RefinementBudget(
         override.max_halvings, default_budget.max_run_wall_s)
-    note = (f" ({engine}'s first step {override.dt:g} s set by the model file: "
+    note = (f" ({engine}'s first step {override.dt:g} s set for this model ([[engine_step]]): "
             f"{override.reason})")
     return float(override.dt), note, budget

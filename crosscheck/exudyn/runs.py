@@ -217,13 +217,8 @@ def programmed_run(scenario, t_end: float, dt: float, output_dt: float = OUTPUT_
 EXACT = "exact programmed run"
 EXUDYN_DT = 1e-3          # s, Exudyn's first coarsest step h (then h/2, h/4)
 # halvings beyond the first three runs to reach the asymptotic regime at every compared
-# time (crosscheck.convergence); a run projected above 120 s is not started.  Six: the
-# first step is FIRST_STEP_FACTOR (two halvings) above the step at which the stiffest mode
-# is resolved, so a model whose stiffest mode matters keeps four halvings beyond it
-REFINEMENT = RefinementBudget(max_halvings=6, max_run_wall_s=120.0)
-# the first step in units of half RK4's stability step of the stiffest mode (|lambda| h ~
-# 1.4): a cost choice, not a gate (see first_step)
-FIRST_STEP_FACTOR = 4.0
+# time (crosscheck.convergence); a run projected above 120 s is not started
+REFINEMENT = RefinementBudget(max_halvings=4, max_run_wall_s=120.0)
 
 
 def _phi_floors(df, constraint_names) -> dict:
@@ -382,24 +377,13 @@ def consistent_start_state(scenario, log=None):
 
 def first_step(scenario) -> float:
     """s, Exudyn's default first step: EXUDYN_DT, or for a model with stiff springs (RFEM
-    links) FIRST_STEP_FACTOR times the step at which the stiffest linearised mode
-    lambda_max at the start has |lambda_max| h ~ 1.4 (half RK4's stability step,
-    gpme_core.stability.rk4_step), i.e. |lambda_max| h ~ 5.6, whichever is smaller.
-
-    The first step only sets where the halving starts; whether a run is in
-    generalized-alpha's asymptotic regime is measured at every compared time
-    (crosscheck.convergence.refine), and the step is halved while it is not.
-    Generalized-alpha damps a mode with |lambda| h >> 1 towards rho_inf per step instead
-    of following it, so where the stiffest mode is excited the error becomes O(h^2) only
-    once |lambda| h < 1: from 1e-3 s the UR10's CFRP forearm (lambda ~ 2e4 1/s) needed
-    more halvings than any budget (observed order < 1 down to 6e-5 s).  Where it is barely
-    excited the runs converge well above that step: the flexible crane's (n_rfe = 3) did
-    from |lambda| h ~ 5.6 on 0.2 s, 1 s and its whole 10 s, and starting at |lambda| h ~
-    1.4 took 16 times the generalized-alpha steps for the same verdict.  The factor 4
-    costs a model of the first kind two more halvings (measured: the UR10's 0.2 s quick
-    run, 3 halvings and 14.0 s instead of 1 and 12.3 s), which REFINEMENT's budget adds."""
-    resolved = rk4_step(scenario.system, scenario.q0, cap=EXUDYN_DT)
-    return whole_steps(min(FIRST_STEP_FACTOR * resolved, EXUDYN_DT))
+    links) the step at which the stiffest linearised mode lambda_max at the start has
+    |lambda_max| h ~ 1.4 (half RK4's stability step, gpme_core.stability.rk4_step),
+    whichever is smaller.  Generalized-alpha damps a mode with |lambda| h >> 1 towards
+    rho_inf per step instead of following it, so its error only becomes O(h^2) once
+    |lambda| h < 1: from 1e-3 s the UR10's CFRP forearm (lambda ~ 2e4 1/s) needed more
+    halvings than any budget (observed order < 1 down to 6e-5 s)."""
+    return whole_steps(rk4_step(scenario.system, scenario.q0, cap=EXUDYN_DT))
 
 
 def whole_steps(dt: float, output_dt: float = OUTPUT_DT) -> float:
