@@ -17,6 +17,7 @@ from exudyn.itemInterface import (LoadForceVector, LoadTorqueVector, MarkerNodeR
 from crosscheck.continuum.layout import continuum_layout  # noqa: E402
 from crosscheck.continuum.runs import continuum_run  # noqa: E402
 from crosscheck.continuum.section import continuum_section, shear_coefficient  # noqa: E402
+from crosscheck.continuum.system import exudyn_section  # noqa: E402
 from crosscheck.continuum.study import max_difference, rfem_history  # noqa: E402
 from gpme_core.rfem import BeamProperties, BeamSection  # noqa: E402
 from gpme_examples.crane import crane_system, initial_state  # noqa: E402
@@ -35,10 +36,7 @@ def _cantilever_tip(beam, elements, load, torque=False):
     cs = continuum_section(beam)
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
-    section = exu.BeamSection()
-    section.stiffnessMatrix = np.diag(cs.stiffness)
-    section.massPerLength = cs.mass_per_length
-    section.inertia = np.diag(cs.rotary_inertia)
+    section = exudyn_section(cs, damping=False)
     nodes = [mbs.AddNode(NodeRigidBodyEP(referenceCoordinates=[beam.length * i / elements, 0, 0,
                                                                  1, 0, 0, 0]))
              for i in range(elements + 1)]

@@ -313,6 +313,7 @@ def exudyn_tip(elements: int, loads: Sequence[float] = LOADS,
     Exudyn's static solver in ``load_steps`` equal steps; ``euler_bernoulli``: E A and
     k G A raised to RFEM's limit (crosscheck.continuum.section)."""
     _require_exudyn()
+    from .system import exudyn_section          # needs Exudyn
     if not isinstance(elements, (int, np.integer)) or elements < 1:
         raise ModelError(f"bend45: elements must be an integer >= 1, got {elements!r}")
     cs = continuum_section(continuum_beam(torsion_constant), euler_bernoulli)
@@ -320,10 +321,7 @@ def exudyn_tip(elements: int, loads: Sequence[float] = LOADS,
     for load in loads:
         sc = exu.SystemContainer()
         mbs = sc.AddSystem()
-        section = exu.BeamSection()
-        section.stiffnessMatrix = np.diag(cs.stiffness)
-        section.massPerLength = cs.mass_per_length
-        section.inertia = np.diag(cs.rotary_inertia)
+        section = exudyn_section(cs, damping=False)
         nodes = []
         for i in range(elements + 1):
             phi = ARC_ANGLE * i / elements

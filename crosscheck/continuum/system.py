@@ -224,16 +224,25 @@ def build_system(model, layout: ContinuumLayout, q0, q_dot0, specs=(), elements=
     return out
 
 
+def exudyn_section(cs, damping: bool = True):
+    """Exudyn's BeamSection of a crosscheck.continuum.section.ContinuumSection: its diagonal
+    stiffness, damping (unless ``damping`` is False) and rotary inertia, and its mass per
+    length (units and strain order in crosscheck.continuum.section)."""
+    section = exu.BeamSection()
+    section.stiffnessMatrix = np.diag(cs.stiffness)
+    if damping:
+        section.dampingMatrix = np.diag(cs.damping)
+    section.massPerLength = cs.mass_per_length
+    section.inertia = np.diag(cs.rotary_inertia)
+    return section
+
+
 def _add_beam(mbs, out, beam, poses, vel, omega, g, rigid_marker):
     n_el = out.elements[beam.name]
     if n_el < 1:
         raise ModelError(f"beam {beam.name!r}: at least one element, got {n_el}")
     cs = continuum_section(beam.beam, out.euler_bernoulli)
-    section = exu.BeamSection()
-    section.stiffnessMatrix = np.diag(cs.stiffness)
-    section.dampingMatrix = np.diag(cs.damping)
-    section.massPerLength = cs.mass_per_length
-    section.inertia = np.diag(cs.rotary_inertia)
+    section = exudyn_section(cs)
     c = beam.carrying_link
     root = poses[c] @ beam.root_frame
     length = beam.beam.length
