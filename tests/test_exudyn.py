@@ -233,3 +233,40 @@ def test_check_run_turns_a_refused_run_into_a_failed_row(tmp_path, monkeypatch):
     assert len(df) == 1 and df["status"].iloc[0] == "fail"
     assert "cannot be reached" in df["reason"].iloc[0]
     assert "Phi_1" in df["reason"].iloc[0]
+
+@pytest.mark.parametrize("which", ["crane", "two_arms_rod"])
+def test_position_level_callbacks_equal_the_full_evaluation(which):
+    """Exudyn's index-3 callbacks take Phi and dPhi/dq from ProgrammedConstraints.
+    position_terms (no frame velocities); they must be the very numbers evaluate gives
+    (the same Pinocchio kinematics and SymPy expressions), and the Jacobian must be the
+    derivative of Phi (central differences, truncation ~h^2 |Phi'''| and round-off
+    ~eps |Phi| / h with h = 1e-6)."""
+    from crosscheck.constraint_reference import with_reference_frames_of
+    from crosscheck.exudyn.constraints import ProgrammedConstraints
+    if which == "crane":
+        sc = crane_scenario(3, on_constraints=True)
+    else:
+        from gpme_io.modelfile import load_model_file
+        from pathlib import Path
+        sc = load_model_file(Path(__file__).resolve().parents[1] / "examples" / "five_bar"
+                             / "two_arms_rod.toml")
+    sc = with_reference_frames_of(sc)
+    pc = ProgrammedConstraints(sc.constraints, sc.model)
+    rng = np.random.default_rng(11)
+    for k in range(4):
+        t = 0.37 * k
+        q = np.asarray(sc.q0, float) + 0.05 * rng.normal(size=pc.n)
+        v = rng.normal(size=pc.n)
+        phi, _, a = pc.evaluate(t, q, v)
+        phi_p, a_p = pc.position_terms(t, q)
+        assert np.array_equal(phi, phi_p) and np.array_equal(a, a_p)
+        assert pc.constraint_function(None, t, None, np.r_[q, 0, 0, 0], np.r_[v, 0, 0, 0],
+                                      False) == phi.tolist()
+        assert np.array_equal(pc.jacobian_function(None, t, None, np.r_[q, 0, 0, 0],
+                                                   np.r_[v, 0, 0, 0], False), a)
+        h = 1e-6
+        fd = np.column_stack([(pc.position_terms(t, q + h * e)[0]
+                               - pc.position_terms(t, q - h * e)[0]) / (2 * h)
+                              for e in np.eye(pc.n)])
+        assert np.allclose(fd, a, rtol=0, atol=1e-7 * max(1.0, np.abs(a).max())), \
+            np.abs(fd - a).max()

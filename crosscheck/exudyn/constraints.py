@@ -62,23 +62,33 @@ class ProgrammedConstraints:
         self.data = self.ps.model.createData()
         self._key = None
         self._value = None
+        self._position_key = None
+        self._position_value = None
+        self._no_velocity = np.zeros(self.n)
         self.evaluations = 0
 
-    def _point_state(self, frame, drift=False):
-        pm, data = self.ps.model, self.data
+    def _frame_id(self, frame):
         try:
-            fid = self.ps.frames[frame]
+            return self.ps.frames[frame]
         except KeyError:
             raise ConstraintError(f"constraint frame {frame!r} is not a frame of the Pinocchio "
                                   f"model; it has {sorted(self.ps.frames)}") from None
+
+    def _frame_jacobian(self, fid):
+        """(3, n) translational LOCAL_WORLD_ALIGNED Jacobian of frame ``fid``, gpme column
+        order (reshaped: Pinocchio hands a (6, 1) matrix over as a (6,) vector)."""
+        pm = self.ps.model
+        jac6 = np.asarray(pin.getFrameJacobian(pm, self.data, fid, LWA)).reshape(6, pm.nv)
+        return self.ps.columns_to_gpme(jac6[:3])
+
+    def _point_state(self, frame, drift=False):
+        pm, data = self.ps.model, self.data
+        fid = self._frame_id(frame)
         p = data.oMf[fid].translation.copy()
         v = pin.getFrameVelocity(pm, data, fid, LWA).linear.copy()
-        # (6, nv); reshaped because Pinocchio hands a (6, 1) matrix over as a (6,) vector
-        jac6 = np.asarray(pin.getFrameJacobian(pm, data, fid, LWA)).reshape(6, pm.nv)
-        jac = self.ps.columns_to_gpme(jac6[:3])
         a = pin.getFrameClassicalAcceleration(pm, data, fid, LWA).linear.copy() if drift \
             else np.zeros(3)
-        return p, v, jac, a
+        return p, v, self._frame_jacobian(fid), a
 
     def _kinematics(self, q, q_dot):
         pm, data = self.ps.model, self.data
@@ -102,6 +112,34 @@ class ProgrammedConstraints:
         self._key, self._value = key, (phi, phi_dot, a)
         return self._value
 
+    def position_terms(self, t: float, q: NDArray):
+        """(Phi (m,), A = dPhi/dq (m, n)) at time t (s) and q (n,), gpme coordinate order:
+        the position level alone, what Exudyn's index-3 solver asks for (no frame
+        velocities: Phi and its gradient do not depend on them).  The same Pinocchio
+        kinematics (oMf after computeJointJacobians) and SymPy expressions as
+        :meth:`evaluate`, each frame's state formed once; the last evaluation is cached."""
+        q = np.asarray(q, dtype=float)
+        key = (float(t), q.tobytes())
+        if key == self._position_key:
+            return self._position_value
+        self.evaluations += 1
+        pm, data = self.ps.model, self.data
+        pin.computeJointJacobians(pm, data, self.ps.q_pin(q))
+        pin.updateFramePlacements(pm, data)
+        states = {}
+
+        def point_state(frame):
+            if frame not in states:
+                fid = self._frame_id(frame)
+                states[frame] = (data.oMf[fid].translation.copy(), np.zeros(3),
+                                 self._frame_jacobian(fid), np.zeros(3))
+            return states[frame]
+
+        phi, _, a, _ = evaluate_reference(self.refs, float(t), q, self._no_velocity,
+                                          point_state)
+        self._position_key, self._position_value = key, (phi, a)
+        return self._position_value
+
     def acceleration_terms(self, t: float, q: NDArray, q_dot: NDArray):
         """(A (m, n), kappa (m,)): Phi_ddot = A q_ddot + kappa at (t, q, q_dot), kappa from
         Pinocchio's classical frame accelerations at q_ddot = 0 (LOCAL_WORLD_ALIGNED) and
@@ -116,15 +154,16 @@ class ProgrammedConstraints:
     # ------------------------------------------------------------------ Exudyn callbacks
     def constraint_function(self, mbs, t, item, q, q_t, velocity_level):
         """Exudyn's constraintUserFunction: Phi (m,), or Phi_dot if velocity_level."""
-        phi, phi_dot, _ = self.evaluate(t, np.asarray(q)[:self.n], np.asarray(q_t)[:self.n])
-        return (phi_dot if velocity_level else phi).tolist()
+        if not velocity_level:
+            return self.position_terms(t, np.asarray(q)[:self.n])[0].tolist()
+        _, phi_dot, _ = self.evaluate(t, np.asarray(q)[:self.n], np.asarray(q_t)[:self.n])
+        return phi_dot.tolist()
 
     def jacobian_function(self, mbs, t, item, q, q_t, velocity_level):
         """Exudyn's jacobianUserFunction: (m, n) dPhi/dq (Exudyn takes the columns of the
         connector's ODE2 coordinates only: the ground point has none); the same matrix is
         dPhi_dot/dq_dot at velocity level."""
-        _, _, a = self.evaluate(t, np.asarray(q)[:self.n], np.asarray(q_t)[:self.n])
-        return a
+        return self.position_terms(t, np.asarray(q)[:self.n])[1]
 
     def add_to(self, mbs, tree) -> int:
         """Add the constraints to ``mbs`` as one ObjectConnectorCoordinateVector between

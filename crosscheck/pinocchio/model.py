@@ -78,6 +78,9 @@ class PinocchioSystem:
         """(nq,) Pinocchio configuration of the gpme coordinates q (n,) (rad, m)."""
         q = np.asarray(q, dtype=float)
         out = pin.neutral(self.model)
+        if not self.continuous.any():         # every coordinate one entry of q_pin
+            out[self.q_index] = q
+            return out
         plain = ~self.continuous
         out[self.q_index[plain]] = q[plain]
         out[self.q_index[self.continuous]] = np.cos(q[self.continuous])
