@@ -362,8 +362,8 @@ class CompiledSystem:
         q_ddot = np.empty(self.n)
         lam = np.empty(self.m)
         info = np.empty(kernels.INFO_SIZE)
-        status = fast.run(self.module.evaluate, float(t), np.asarray(q, dtype=float),
-                          np.asarray(q_dot, dtype=float), self.md, self.cd,
+        status = fast.run(self.module.evaluate, float(t), fast.state_array(q),
+                          fast.state_array(q_dot), self.md, self.cd,
                           self.options(switch_below), ic, dc, q_ddot, lam, info,
                           self.workspace())
         return status, q_ddot, lam, info

@@ -161,8 +161,8 @@ def dynamics_terms(model, t, q, q_dot):
 
     Uses the compiled kernels of gpme_core.fast (same formulas, equal to the numpy
     functions above to round-off) unless GPME_NO_JIT=1."""
-    q = np.asarray(q, dtype=float)
-    q_dot = np.asarray(q_dot, dtype=float)
+    q = fast.state_array(q)
+    q_dot = fast.state_array(q_dot)
     if fast.ENABLED:
         t_all, s_all, m, h, g = fast.run(
             fast.chain_and_terms, model.origins, model.generators, model.is_revolute,

@@ -126,6 +126,18 @@ else:  # pragma: no cover
     _jit_user = _jit_leaf = _jit
 
 
+def state_array(x) -> np.ndarray:
+    """``x`` as a writeable C-contiguous float64 array (copied only when it is not one).
+
+    numba types a read-only array apart from a writeable one, so a kernel called once with
+    a read-only state (a scenario's frozen q0, a pandas column) and once with a writeable
+    one is compiled twice, and every kernel it calls with it (measured: evaluate, chain_
+    and_terms and point each compiled a second time, ~15 s of a cold start).  The state
+    vectors handed to the kernels go through here, so each signature is compiled once."""
+    a = np.ascontiguousarray(x, dtype=float)
+    return a if a.flags.writeable else a.copy()
+
+
 def run(kernel, *args):
     """``kernel(*args)``, giving back an interrupt that arrived while it ran.
 

@@ -173,8 +173,8 @@ def vector_kinematics(model, kin, q_dot, link, r_local, w):
     'position' is the world vector, its Jacobian columns S_i (u, 0) = omega_i x u)."""
     if fast.ENABLED:
         pos, vel, jac, drift = fast.run(fast.point, kin.T, kin.S, model.moves,
-                                        np.asarray(q_dot, dtype=float), link,
-                                        np.asarray(r_local, dtype=float), float(w))
+                                        fast.state_array(q_dot), link,
+                                        fast.state_array(r_local), float(w))
         return PointKinematics(pos, vel, jac, drift)
     r = np.append(np.asarray(r_local, dtype=float), float(w))
     r_world = kin.T[link] @ r

@@ -146,6 +146,9 @@ def time_evaluation(system, q0, q_dot0, progress=None, compiled=None):
 
 def _timed(system, q0, q_dot0, progress, compiled):
     """time_evaluation's measurement (see there)."""
+    # writeable copies: the run's own states are, and a read-only q0 would compile the
+    # kernels a second time (gpme_core.fast.state_array)
+    q0, q_dot0 = fast.state_array(q0), fast.state_array(q_dot0)
     if compiled is not None:
         solve = compiled.accelerator(system.ic, system.dc)
     else:

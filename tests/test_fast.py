@@ -81,3 +81,33 @@ def test_reduced_solve_compiled_equals_numpy(n_rfe, rng, monkeypatch):
             a, b = getattr(compiled, name), getattr(reference, name)
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * max(1.0, np.abs(b).max()),
                                        err_msg=name)
+
+
+def test_state_array_gives_writeable_float_arrays_and_copies_only_when_needed():
+    frozen = np.arange(4.0)
+    frozen.setflags(write=False)
+    out = fast.state_array(frozen)
+    assert out.flags.writeable and out.flags.c_contiguous and out.dtype == np.float64
+    assert np.array_equal(out, frozen) and out is not frozen
+    mine = np.linspace(0.0, 1.0, 5)
+    assert fast.state_array(mine) is mine                  # nothing to copy
+    assert fast.state_array([1, 2]).dtype == np.float64    # lists and ints become floats
+
+
+def test_a_read_only_state_compiles_no_second_kernel_signature():
+    """numba types read-only arrays apart; dynamics_terms and the compiled evaluation
+    hand it writeable states, so no kernel is (compiled or loaded) for a read-only q."""
+    from gpme_core.compiled import for_system
+    from gpme_io.scenario import crane_scenario
+    sc = crane_scenario(1, on_constraints=True)
+    q, qd = np.array(sc.q0, float), np.array(sc.q_dot0, float)
+    q.setflags(write=False)
+    qd.setflags(write=False)
+    dy.dynamics_terms(sc.model, 0.0, q, qd)
+    compiled, _ = for_system(sc.system)
+    compiled.evaluate(0.0, q, qd, sc.system.ic, sc.system.dc)
+    for kernel, state_args in ((fast.chain_and_terms, (-2, -1)),
+                               (compiled.module.evaluate, (1, 2))):
+        assert kernel.signatures
+        for sig in kernel.signatures:
+            assert not any(sig[k].mutable is False for k in state_args), (kernel, sig)
