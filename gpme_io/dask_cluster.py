@@ -73,6 +73,13 @@ def worker_count(client) -> int:
     return len(client.scheduler_info().get("workers", {}))
 
 
+def thread_count(client) -> int:
+    """Number of tasks the workers of ``client``'s scheduler run at once now (the sum of
+    their threads; at least 1)."""
+    workers = client.scheduler_info().get("workers", {})
+    return max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))
+
+
 def as_completed(futures):
     """Dask's as_completed over ``futures`` (an iterable of Dask futures)."""
     from dask.distributed import as_completed as completed    # Dask: heavy, cluster only

@@ -161,9 +161,29 @@ class _LostClient:
         return _LostFuture()
 
 
+class _Completed:
+    """Dask's as_completed for fake futures: each in the order it was added, futures added
+    while iterating included."""
+
+    def __init__(self, futures):
+        self.queue = list(futures)
+
+    def add(self, future):
+        self.queue.append(future)
+
+    def __iter__(self):
+        while self.queue:
+            yield self.queue.pop(0)
+
+
+def _fake_cluster(monkeypatch, threads=1):
+    monkeypatch.setattr(step_pool.dask_cluster, "worker_count", lambda client: threads)
+    monkeypatch.setattr(step_pool.dask_cluster, "thread_count", lambda client: threads)
+    monkeypatch.setattr(step_pool.dask_cluster, "as_completed", _Completed)
+
+
 def test_a_part_whose_worker_is_lost_is_its_steps_crash_row(tmp_path, monkeypatch):
-    monkeypatch.setattr(step_pool.dask_cluster, "worker_count", lambda client: 1)
-    monkeypatch.setattr(step_pool.dask_cluster, "as_completed", lambda futures: list(futures))
+    _fake_cluster(monkeypatch)
     outcomes = []
     step_pool.run_on_cluster(_LostClient(), ["pinocchio"], tmp_path, None, True, None,
                              outcomes.append)
@@ -171,3 +191,37 @@ def test_a_part_whose_worker_is_lost_is_its_steps_crash_row(tmp_path, monkeypatc
     assert outcome.crash is not None and "workers died" in outcome.crash.message
     assert outcome.table["status"].tolist() == ["fail"]
     assert (tmp_path / "checks").is_dir()          # the crash row is written like any row
+
+
+class _CountingClient(_LostClient):
+    """A client that records how many submitted parts have not come back yet."""
+
+    def __init__(self):
+        self.in_flight, self.most, self.keys = 0, 0, []
+
+    def submit(self, *args, key=None, **kwargs):
+        self.in_flight += 1
+        self.most = max(self.most, self.in_flight)
+        self.keys.append(key)
+        return _LostFuture()
+
+
+def test_no_more_parts_are_in_flight_than_the_workers_run_at_once(tmp_path, monkeypatch):
+    """One part per worker thread is submitted at a time (Dask would queue the rest on
+    busy workers ahead of time), every part in the longest-step-first order."""
+    _fake_cluster(monkeypatch, threads=2)
+    client = _CountingClient()
+
+    class _Finishing(_Completed):          # a future handed out is a part that ended
+        def __iter__(self):
+            for future in super().__iter__():
+                client.in_flight -= 1
+                yield future
+    monkeypatch.setattr(step_pool.dask_cluster, "as_completed", _Finishing)
+    outcomes = []
+    step_pool.run_on_cluster(client, ["gpme", "pinocchio"], tmp_path, None, True, None,
+                             outcomes.append, previous_times={"gpme": 1.0, "pinocchio": 9.0})
+    parts = {"gpme": 2, "pinocchio": 2}           # the quick plan: rigid and n = 3 each
+    assert client.most == 2 and len(client.keys) == sum(parts.values())
+    assert [k.split("-")[2] for k in client.keys] == ["pinocchio"] * 2 + ["gpme"] * 2
+    assert sorted(o.step for o in outcomes) == ["gpme", "pinocchio"]
