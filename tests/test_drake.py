@@ -327,3 +327,51 @@ def test_run_writes_rows_and_page(tmp_path):
     assert set(df["engine"]) == {"drake", "gpme"}
     page = (tmp_path / "drake.html").read_text()
     assert "gpme vs Drake" in page and dc.drake_version() in page
+
+
+# --------------------------------------------------------------------------- drives
+def _drive_values(model, tmp_path, times):
+    """(times, nv) Drake's drive port of ``model`` evaluated at ``times`` (s), and the
+    DrakeSystem (its velocity order)."""
+    from pydrake.systems.framework import DiagramBuilder
+    from crosscheck.drake.drives import drive_output
+    from crosscheck.drake.model import for_model
+    ds = for_model(model, tmp_path, model.name)
+    builder = DiagramBuilder()
+    builder.ExportOutput(drive_output(builder, model, ds), "drives")
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    out = []
+    for t in times:
+        context.SetTime(float(t))
+        out.append(np.array(diagram.get_output_port(0).Eval(context)))
+    return np.array(out), ds, diagram
+
+
+@pytest.mark.parametrize("extra", [None, "constant"])
+def test_drake_drive_sources_equal_the_models_drive_forces(tmp_path, extra):
+    """The crane's quintic ramp (and a constant added on another joint) as Drake's own
+    TrajectorySource / ConstantVectorSource: the model's t(t) in Drake's velocity order,
+    before, during and after the ramp, to round-off of a degree-5 polynomial in t."""
+    from gpme_core.model import Drive, Model
+    from gpme_core.time_functions import Constant
+    m = crane_scenario(1).model
+    drives = m.drives + ((Drive(m.coordinate_names[-1], Constant(-3.5)),) if extra else ())
+    model = Model(m.joints, m.links, m.frames, drives, m.gravity, m.flexible_links, m.name,
+                  m.geometry, m.point_springs)
+    times = np.array([-0.5, 0.0, 0.37, 1.9, 2.5, 4.999, 5.0, 7.3])
+    values, ds, diagram = _drive_values(model, tmp_path, times)
+    assert not any(type(s).__name__ == "PythonDrives" for s in diagram.GetSystems())
+    expected = np.array([ds.to_drake(model.drive_forces(t)) for t in times])
+    np.testing.assert_allclose(values, expected, rtol=0, atol=16 * np.finfo(float).eps)
+
+
+def test_a_drive_drake_has_no_source_for_keeps_the_python_system(tmp_path):
+    """A cosine drive (the small arm's) goes through the LeafSystem that calls the model's
+    drive_forces: the same values, every evaluation in Python."""
+    model = small_model()
+    times = np.array([0.0, 0.4, 1.3])
+    values, ds, diagram = _drive_values(model, tmp_path, times)
+    assert any(type(s).__name__ == "PythonDrives" for s in diagram.GetSystems())
+    expected = np.array([ds.to_drake(model.drive_forces(t)) for t in times])
+    np.testing.assert_array_equal(values, expected)

@@ -5,7 +5,7 @@ The model runs without its constraints, drives on (crosscheck.mujoco.cases.free_
 the crane gets the holding springs that keep its free arm in the slider's stroke, the same
 in both engines).  Drake: the continuous MultibodyPlant of the URDF gpme wrote
 (crosscheck.drake.model.for_model), the drives t(t) fed to its applied generalized force
-input port by a LeafSystem, integrated by ``Simulator`` with Drake's ``runge_kutta5``
+input port by Drake's own sources where it has the function (crosscheck.drake.drives), integrated by ``Simulator`` with Drake's ``runge_kutta5``
 (Dormand-Prince 5(4), FSAL, 7 stages) in fixed-step mode at h, h/2 and h/4, advanced to
 each output time k output_dt in turn (``AdvanceTo``) and the state recorded there.  Drake's
 clock adds h at every step, so within an interval it drifts from k h by a few roundings;
@@ -29,7 +29,7 @@ from typing import Optional
 import numpy as np
 import pandas as pd
 from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
-from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from pydrake.systems.framework import DiagramBuilder
 
 from gpme_core.errors import ConstraintError, SimulationError
 
@@ -40,6 +40,7 @@ from ..sampling import COMPARED_DT, compared_output_dt
 from ..convergence import FINEST, RefinementBudget, refine
 from ..mujoco.cases import free_variant
 from ..pinocchio.runs import run_step, run_t_end
+from .drives import drive_output
 from .model import DrakeSystem, for_model
 
 ENGINE = "drake"
@@ -53,18 +54,6 @@ MIN_FREE_T_END = 0.05       # s, shortest free run compared (5 output samples)
 # Drake's step halvings beyond its first three runs, to reach the asymptotic regime at every
 # compared time (crosscheck.convergence); a run projected above 120 s is not started
 REFINEMENT = RefinementBudget(max_halvings=3, max_run_wall_s=120.0)
-
-
-class _Drives(LeafSystem):
-    """Output: the gpme model's drive forces t(t) (N, N m) in Drake's velocity order."""
-
-    def __init__(self, model, ds: DrakeSystem):
-        super().__init__()
-        self._model, self._ds = model, ds
-        self.DeclareVectorOutputPort("drives", ds.plant.num_velocities(), self._calc)
-
-    def _calc(self, context, output):
-        output.SetFromVector(self._ds.to_drake(self._model.drive_forces(context.get_time())))
 
 
 def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir,
@@ -83,9 +72,9 @@ def drake_free_run(scenario, t_end: float, dt: float, output_dt: float, urdf_dir
     builder = DiagramBuilder()
     plant = builder.AddSystem(ds.plant)
     port = plant.get_applied_generalized_force_input_port()
-    if model.drives:
-        drives = builder.AddSystem(_Drives(model, ds))
-        builder.Connect(drives.get_output_port(), port)
+    drives = drive_output(builder, model, ds)
+    if drives is not None:
+        builder.Connect(drives, port)
     else:
         builder.ExportInput(port, "applied")
     diagram = builder.Build()
