@@ -34,8 +34,10 @@ from .verify_steps import PartOutcome, StepOutcome
 
 log = logging.getLogger("gpme.verify")
 # the steps, longest first, when no earlier report gives their times (crane, quick and
-# full runs of this machine, 2026-11)
-TYPICAL_ORDER = ("exudyn", "continuum", "drake", "pinocchio", "mujoco", "gpme")
+# full runs of this machine, 2026-11; MuJoCo's and Pinocchio's take about as long, and
+# MuJoCo goes first: its finish here, the report's figures and 3D pages, is the longest
+# of any step, better done while the workers still run parts than after the last one)
+TYPICAL_ORDER = ("exudyn", "continuum", "drake", "mujoco", "pinocchio", "gpme")
 # where the shared gpme runs live during the run (under the staging directory)
 SHARED_RUNS_DIR = ".shared_runs"
 
@@ -64,15 +66,44 @@ def submission_order(steps: Sequence[str], previous_times: Optional[Dict[str, fl
                                         typical.get(s, -1)))
 
 
+def part_name(step: str, scenario_name: str) -> str:
+    """The name of one part in the report's part times: "<step>/<scenario>"."""
+    return f"{step}/{scenario_name}"
+
+
+def part_order(plan: Dict[str, list], previous: Optional[Dict[str, float]]) -> list:
+    """[(step, index, scenario)] of ``plan`` ({step: scenarios}, longest step first): the
+    longest part first by ``previous`` ({part name: s}, the last report's part times),
+    parts it does not have before them (in the plan's order); without ``previous`` the
+    plan's order.  Longest first keeps a long part from starting last and the workers
+    finish close together."""
+    parts = [(step, index, scenario) for step, chosen in plan.items()
+             for index, scenario in enumerate(chosen)]
+    if not previous:
+        return parts
+    rank = {p[:2]: k for k, p in enumerate(parts)}
+
+    def key(p):
+        seconds = previous.get(part_name(p[0], p[2].name))
+        return (seconds is not None, -(seconds or 0.0), rank[p[:2]])
+    return sorted(parts, key=key)
+
+
 def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick, max_wall_s,
                    on_done: Callable[[StepOutcome], None],
-                   previous_times: Optional[Dict[str, float]] = None) -> Tuple[int, Dict[str, int]]:
+                   previous_times: Optional[Dict[str, float]] = None,
+                   previous_part_times: Optional[Dict[str, float]] = None,
+                   part_times: Optional[Dict[str, float]] = None) -> Tuple[int, Dict[str, int]]:
     """Run the parts of ``steps`` as tasks on ``client``'s cluster; write each part's files
     into ``staging`` and replay its log records as it ends, finish a step (its page, rows
     and on_done(outcome)) when its parts are all back.  Returns (the number of workers,
     {"computed": n, "shared": n} gpme runs over all parts, as :func:`run_in_process`).  A
     task that raises OutputWriteError raises here; one that fails otherwise (a lost worker)
-    is a crashed part of its step (the step's crash row)."""
+    is a crashed part of its step (the step's crash row).
+
+    previous_times, previous_part_times : {step: s}, {part name: s} of the last report (the
+        order of submission: :func:`submission_order`, :func:`part_order`)
+    part_times : a dict filled with {part name: s} of this run (for the report)"""
     staging = Path(staging)
     shared = str(staging.resolve() / SHARED_RUNS_DIR)
     order = submission_order(steps, previous_times)
@@ -90,8 +121,7 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
     log.info(f"[dask] {n_parts} parts of {len(plan)} steps on {workers} workers at "
              f"{client.scheduler.address}, longest step first: {', '.join(plan)}")
     token = uuid.uuid4().hex[:8]
-    pending = deque((step, index, scenario) for step, chosen in plan.items()
-                    for index, scenario in enumerate(chosen))
+    pending = deque(part_order(plan, previous_part_times))
     futures = {}
     completed = dask_cluster.as_completed([])
 
@@ -128,6 +158,8 @@ def run_on_cluster(client, steps: Sequence[str], staging: Path, scenarios, quick
             for relative, data in files.items():
                 atomic_write_bytes(staging / relative, data)
             name = plan[outcome.step][outcome.index].name
+            if part_times is not None:
+                part_times[part_name(outcome.step, name)] = round(float(outcome.seconds), 3)
             log.info(f"[{outcome.step}] {name} done on a worker in {outcome.seconds:.1f} s")
             for logger_name, level, message in records:
                 logging.getLogger(logger_name).log(level, message)

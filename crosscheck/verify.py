@@ -150,7 +150,7 @@ def run_verify(root, quick=False, only=None, progress=True, run_id=None, scenari
 def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall_s=None,
                previous=(None, "", None), workers=1, scheduler=None):
     start = time.perf_counter()
-    tables, timings, prerequisites = {}, {}, []
+    tables, timings, prerequisites, part_times = {}, {}, [], {}
     record = _models_record(scenarios if scenarios is not None else
                             default_scenarios("pinocchio", quick))
     atomic_write_text(staging / "models.json", json.dumps(record, indent=1))
@@ -168,11 +168,12 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
                  f"{timings[step]:.1f} s")
 
     if scheduler or (workers > 1 and len(steps) > 1):
-        previous_times = ((previous[0] or {}).get("run") or {}).get("step_times_s")
+        previous_run = (previous[0] or {}).get("run") or {}
         with dask_cluster.client_for(scheduler, workers) as client:
-            n_workers, shared = step_pool.run_on_cluster(client, steps, staging, scenarios,
-                                                         quick, max_wall_s, done,
-                                                         previous_times)
+            n_workers, shared = step_pool.run_on_cluster(
+                client, steps, staging, scenarios, quick, max_wall_s, done,
+                previous_run.get("step_times_s"), previous_run.get("part_times_s"),
+                part_times)
             execution = (f"{len(steps)} steps in parallel on {n_workers} Dask workers "
                          f"({scheduler or 'local cluster'})")
     else:
@@ -195,6 +196,7 @@ def _run_steps(root, staging, run_id, quick, only, progress, scenarios, max_wall
         log.warning(warning)
     meta = environment(quick=quick, only=only, run_id=run_id,
                        wall_time_s=time.perf_counter() - start, step_times_s=timings,
+                       part_times_s=part_times,
                        execution=execution)
     write_csv(summary, staging / "summary.csv")
     document = {

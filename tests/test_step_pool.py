@@ -79,7 +79,7 @@ def test_refined_runs_of_two_steps_share_their_runs(tmp_path):
 
 def test_longest_steps_are_submitted_first():
     steps = ["gpme", "pinocchio", "mujoco", "continuum"]
-    assert step_pool.submission_order(steps, None) == ["continuum", "pinocchio", "mujoco",
+    assert step_pool.submission_order(steps, None) == ["continuum", "mujoco", "pinocchio",
                                                        "gpme"]
     # the previous report's times decide for the steps it has; a step it lacks goes first
     times = {"gpme": 50.0, "pinocchio": 5.0, "mujoco": 20.0}
@@ -225,3 +225,26 @@ def test_no_more_parts_are_in_flight_than_the_workers_run_at_once(tmp_path, monk
     assert client.most == 2 and len(client.keys) == sum(parts.values())
     assert [k.split("-")[2] for k in client.keys] == ["pinocchio"] * 2 + ["gpme"] * 2
     assert sorted(o.step for o in outcomes) == ["gpme", "pinocchio"]
+
+
+def test_parts_go_longest_first_by_the_last_reports_part_times():
+    """part_order: without times the plan's order; with them the longest part first, a
+    part the last report does not have before every known one."""
+    from types import SimpleNamespace as NS
+    plan = {"exudyn": [NS(name="rigid"), NS(name="n3")],
+            "drake": [NS(name="rigid"), NS(name="n3"), NS(name="n10")]}
+    names = [f"{s}/{sc.name}" for s, _, sc in step_pool.part_order(plan, None)]
+    assert names == ["exudyn/rigid", "exudyn/n3", "drake/rigid", "drake/n3", "drake/n10"]
+    previous = {"exudyn/rigid": 19.0, "exudyn/n3": 165.0, "drake/rigid": 11.0,
+                "drake/n3": 38.0}
+    names = [f"{s}/{sc.name}" for s, _, sc in step_pool.part_order(plan, previous)]
+    assert names == ["drake/n10", "exudyn/n3", "drake/n3", "exudyn/rigid", "drake/rigid"]
+
+
+def test_a_cluster_run_reports_each_parts_time(tmp_path, monkeypatch):
+    _fake_cluster(monkeypatch, threads=2)
+    times = {}
+    step_pool.run_on_cluster(_CountingClient(), ["gpme"], tmp_path, None, True, None,
+                             lambda o: None, part_times=times)
+    assert sorted(times) == ["gpme/crane_flexible_n3", "gpme/crane_rigid"]
+    assert all(v >= 0.0 for v in times.values())
