@@ -53,7 +53,9 @@ def write_spread_plots(run_dir, rows):
         ax.set_xlabel("error / tolerance of each compared state or run (pass below 1)")
         ax.set_title(f"{engine} / {section} / {model}", fontsize=9)
         ax.grid(True, axis="x", alpha=0.3)
-        fig.tight_layout()
+        # no tight_layout: the PNG is cut to its drawn extent (gpme_io.png.figure_png,
+        # bbox_inches="tight"), long labels included, and the axes keep the figure's
+        # width; tight_layout's extra draw was a quarter of each plot's cost
         path = spread_path(engine, section, model)
         atomic_save_figure(fig, run_dir / path, dpi=80)
         out[(engine, section, model)] = path
