@@ -13,9 +13,8 @@ chain; gpme_core/kernels.py: the fused right-hand side with springs, dampers, dr
 constraint rows, kappa, Baumgarte, the reduced solve and the RK4 loop) and the Python code
 whose numbers those kernels are given (gpme_core/rfem.py: section constants, sde springs and
 dampers, the rigid elements' mass).  faults.run shows for each fault that it changes a
-compiled run (its probe), so none of them sits on the numpy reference path only; except
-``chain-articulated-inertia``, on the free solve, which the probe's programmed runs do not
-take (verify's free runs and tests/test_chain_solve.py do).
+compiled run (its probe), so none of them sits on the numpy reference path only
+(``chain-articulated-inertia``, on the free solve, through the probe's free crane run).
 
 Sizes are relative (a factor 1.001 is 1e-3) unless the fault is an offset; every fault is
 at most 1e-3 of the term it changes: subtle, far above round-off (1e-16) and the engines'

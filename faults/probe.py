@@ -2,8 +2,8 @@
 
     python -m faults.probe OUT.npz [--crane] [--model FILE ...] [--t-end S]
 
-For the crane (rigid and 3-segment flexible, gpme_io.scenario.crane_scenario) and each model
-file, integrates the first ``--t-end`` seconds from the scenario's initial state with its
+For the crane (rigid and 3-segment flexible, gpme_io.scenario.crane_scenario; the flexible
+one also free, without its constraints) and each model file, integrates the first ``--t-end`` seconds from the scenario's initial state with its
 own integrator and step (gpme_io.runs.simulate_scenario) and saves, per scenario, the columns
 the compiled loop integrates: every coordinate, its velocity and the three work integrals
 (W_dissipated, W_drive, W_reaction).  A planted fault that changes these has changed what
@@ -26,10 +26,15 @@ WORK_COLUMNS = ("W_dissipated", "W_drive", "W_reaction")
 
 
 def _scenarios(crane, model_files):
-    """[(key, Scenario)]: "crane n_rfe=0", "crane n_rfe=3", then each model file's path."""
+    """[(key, Scenario)]: "crane n_rfe=0", "crane n_rfe=3", "crane n_rfe=3 free" (the arm
+    held in the slider's stroke, no constraints: the free serial-chain solve, which the
+    programmed runs do not take), then each model file's path."""
+    from crosscheck.mujoco.cases import free_variant
     from gpme_io.modelfile import load_model_file
     from gpme_io.scenario import crane_scenario
     out = [(f"crane n_rfe={n}", crane_scenario(n)) for n in (0, 3)] if crane else []
+    if crane:
+        out.append(("crane n_rfe=3 free", free_variant(crane_scenario(3))))
     return out + [(str(p), load_model_file(Path(p))) for p in model_files]
 
 
