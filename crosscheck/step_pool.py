@@ -7,9 +7,10 @@ gpme_io.dask_cluster: a local cluster of one single-threaded worker process per 
 (crosscheck.verify_steps.run_part), submitted longest step first (by the step times of the
 previous report, or :data:`TYPICAL_ORDER`), so the models of one run spread over the
 workers too; one part per worker thread is in flight, the next submitted when one ends, so
-a worker that frees up takes the next part instead of waiting behind a busy one.  A worker runs its part in a temporary directory of its own and returns the
-part, the bytes of every file it wrote (written here, atomically, under the staging
-directory: workers on other machines need no shared file system) and its log records
+a worker that frees up takes the next part instead of waiting behind a busy one.  A
+worker runs its part in a temporary directory of its own and returns the part, the bytes
+of every file it wrote (written here, atomically, under the staging directory: workers on
+other machines need no shared file system) and its log records
 (printed here when the part ends).  When a step's parts are all back, its page and rows
 are made here (verify_steps.finish_step).  Either way the gpme runs several steps compare
 against are computed once (crosscheck.run_memo, on a directory under the staging
@@ -18,9 +19,9 @@ machine).
 """
 import logging
 import tempfile
-from collections import deque
 import uuid
 import warnings
+from collections import deque
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple

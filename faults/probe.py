@@ -3,7 +3,8 @@
     python -m faults.probe OUT.npz [--crane] [--model FILE ...] [--t-end S]
 
 For the crane (rigid and 3-segment flexible, gpme_io.scenario.crane_scenario; the flexible
-one also free, without its constraints) and each model file, integrates the first ``--t-end`` seconds from the scenario's initial state with its
+one also free, without its constraints) and each model file, integrates the first
+``--t-end`` seconds from the scenario's initial state with its
 own integrator and step (gpme_io.runs.simulate_scenario) and saves, per scenario, the columns
 the compiled loop integrates: every coordinate, its velocity and the three work integrals
 (W_dissipated, W_drive, W_reaction).  A planted fault that changes these has changed what

@@ -69,10 +69,9 @@ def drive_output(builder, model, ds) -> Optional[object]:
     sources = [_native_source(d.function) for d in model.drives]
     if any(s is None for s in sources):
         return builder.AddSystem(PythonDrives(model, ds)).get_output_port()
-    names = list(model.coordinate_names)
     selection = np.zeros((ds.plant.num_velocities(), len(sources)))
     for k, drive in enumerate(model.drives):
-        selection[ds.v_index[names.index(drive.joint)], k] += 1.0
+        selection[ds.v_index[model.index(drive.joint)], k] += 1.0
     stack = builder.AddSystem(Multiplexer(len(sources)))
     for k, source in enumerate(sources):
         builder.Connect(builder.AddSystem(source).get_output_port(), stack.get_input_port(k))

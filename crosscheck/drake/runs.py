@@ -5,9 +5,10 @@ The model runs without its constraints, drives on (crosscheck.mujoco.cases.free_
 the crane gets the holding springs that keep its free arm in the slider's stroke, the same
 in both engines).  Drake: the continuous MultibodyPlant of the URDF gpme wrote
 (crosscheck.drake.model.for_model), the drives t(t) fed to its applied generalized force
-input port by Drake's own sources where it has the function (crosscheck.drake.drives), integrated by ``Simulator`` with Drake's ``runge_kutta5``
-(Dormand-Prince 5(4), FSAL, 7 stages) in fixed-step mode at h, h/2 and h/4, advanced to
-each output time k output_dt in turn (``AdvanceTo``) and the state recorded there.  Drake's
+input port by Drake's own sources where it has the function (crosscheck.drake.drives),
+integrated by ``Simulator`` with Drake's ``runge_kutta5`` (Dormand-Prince 5(4), FSAL, 7
+stages) in fixed-step mode at h, h/2 and h/4, advanced to each output time k output_dt in
+turn (``AdvanceTo``) and the state recorded there.  Drake's
 clock adds h at every step, so within an interval it drifts from k h by a few roundings;
 at each output time the simulator ends exactly on the requested time (with a step of the
 drift's size where needed), so the samples are at gpme's output times, not ~N eps t
